@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs dala's build dependencies from Debian packages. Idempotent: packages that are already
+# installed are skipped, and apt-get is not touched at all when nothing is missing.
+set -euo pipefail
+PACKAGES=(cmake make g++ ccache pkg-config
+  libceres-dev libeigen3-dev libopencv-dev libsuitesparse-dev
+  libgflags-dev libgoogle-glog-dev libgtest-dev libgmock-dev libbenchmark-dev)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "[deps] all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+echo "[deps] installing: ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,58 @@
+#ifndef DALA_TESTS_TEST_UTIL_H_
+#define DALA_TESTS_TEST_UTIL_H_
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <random>
+#include <string>
+
+#include "core/geometry.h"
+
+namespace dala::testing {
+
+// Folder of the shared real recordings; tests that need it call DALA_SKIP_WITHOUT_SHARED_DATA().
+inline std::string SharedDataDir() { return DALA_SHARED_DATA_DIR; }
+inline bool HaveSharedData(const std::string& sub) {
+  return std::filesystem::exists(SharedDataDir() + "/" + sub);
+}
+#define DALA_SKIP_WITHOUT_SHARED_DATA(sub)                                                    \
+  if (!::dala::testing::HaveSharedData(sub))                                                  \
+  GTEST_SKIP() << "shared data '" << ::dala::testing::SharedDataDir() << "/" << (sub)         \
+               << "' is absent (it sits beside the project as ../shared/data); skipping"
+
+// A fresh temporary folder per test, removed at the end.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = std::filesystem::temp_directory_path() /
+            (std::string("dala_") + (info ? info->test_suite_name() : "t") + "_" +
+             (info ? info->name() : "x") + "_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  std::string path() const { return path_.string(); }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline Pose RandomPose(std::mt19937& rng, double rot_scale = 1.0, double trans_scale = 5.0) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Vector6d xi;
+  for (int i = 0; i < 6; ++i) xi[i] = n(rng) * (i < 3 ? rot_scale : trans_scale);
+  return ExpSE3(xi);
+}
+
+#define EXPECT_POSE_NEAR(A, B, tol)                                                          \
+  EXPECT_LT(((A).matrix() - (B).matrix()).cwiseAbs().maxCoeff(), (tol))                     \
+      << "A=\n" << (A).matrix() << "\nB=\n" << (B).matrix()
+
+}  // namespace dala::testing
+
+#endif  // DALA_TESTS_TEST_UTIL_H_
