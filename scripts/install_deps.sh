@@ -4,7 +4,8 @@
 set -euo pipefail
 PACKAGES=(cmake make g++ ccache pkg-config
   libceres-dev libeigen3-dev libopencv-dev libsuitesparse-dev
-  libgflags-dev libgoogle-glog-dev libgtest-dev libgmock-dev libbenchmark-dev)
+  libgflags-dev libgoogle-glog-dev libgtest-dev libgmock-dev libbenchmark-dev
+  nlohmann-json3-dev)
 missing=()
 for p in "${PACKAGES[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
