@@ -1,0 +1,49 @@
+#ifndef DALA_FRONTEND_KEYFRAME_POLICY_H_
+#define DALA_FRONTEND_KEYFRAME_POLICY_H_
+
+#include <string>
+
+#include "core/geometry.h"
+
+namespace dala {
+
+// When does the current frame become a keyframe? When any of these crosses its threshold,
+// measured against the last keyframe:
+//  - the fraction of the keyframe's tracked landmarks still tracked drops below
+//    `min_tracked_fraction` (the view has changed: new landmarks are needed);
+//  - the median image displacement of the landmarks tracked since the keyframe (parallax)
+//    exceeds `max_parallax_px` (enough baseline for the monocular estimators);
+//  - the camera travelled more than `max_distance_m` or turned more than `max_rotation_rad`;
+//  - `max_frames` frames passed (bounded gap for the backend).
+// A frame never becomes a keyframe while fewer than `min_frames` frames passed.
+struct KeyframePolicyOptions {
+  double min_tracked_fraction = 0.6;
+  double max_parallax_px = 30.0;
+  double max_distance_m = 1.0;
+  double max_rotation_rad = 0.17;  // ~10 degrees.
+  int max_frames = 10;
+  int min_frames = 1;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct KeyframeEvidence {
+  int frames_since_keyframe = 0;
+  double tracked_fraction = 1.0;
+  double median_parallax_px = 0.0;
+  Pose T_kf_cur = Pose::Identity();  // Current camera in the keyframe's camera (estimated).
+};
+
+class KeyframePolicy {
+ public:
+  explicit KeyframePolicy(const KeyframePolicyOptions& options);
+  // True when the current frame should become a keyframe; `reason` names the criterion.
+  bool IsKeyframe(const KeyframeEvidence& evidence, const char** reason = nullptr) const;
+
+ private:
+  KeyframePolicyOptions options_;
+};
+
+}  // namespace dala
+
+#endif  // DALA_FRONTEND_KEYFRAME_POLICY_H_
