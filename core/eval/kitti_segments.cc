@@ -7,6 +7,12 @@
 
 namespace dala {
 
+std::vector<double> KittiDevkitLengths() {
+  std::vector<double> lengths;
+  for (int l = 100; l <= 800; l += 100) lengths.push_back(l);
+  return lengths;
+}
+
 double KittiRotationError(const Eigen::Matrix3d& R) {
   const double d = 0.5 * (R.trace() - 1.0);
   return std::acos(std::clamp(d, -1.0, 1.0));

@@ -20,9 +20,12 @@ namespace dala {
 // either whole trajectory: expressing the estimate relative to its first pose (the devkit's
 // convention, both start at identity) changes nothing, and no alignment is applied. A scale
 // error of the estimate is not removed (as in the devkit).
+// The devkit's segment lengths: 100, 200, ..., 800 m.
+std::vector<double> KittiDevkitLengths();
+
 struct KittiSegmentOptions {
   int step_frames = 10;  // First frames are 0, step, 2 step, ...
-  std::vector<double> lengths_m = {100, 200, 300, 400, 500, 600, 700, 800};
+  std::vector<double> lengths_m = KittiDevkitLengths();  // Segment lengths, metres.
 };
 
 struct KittiSegment {
