@@ -141,7 +141,7 @@ std::string EvalResultToTable(const EvalResult& r) {
   };
   const auto num = [](double v, const char* unit, int precision = 6) {
     char buf[64];
-    std::snprintf(buf, sizeof(buf), "%.*f %s", precision, v, unit);
+    std::snprintf(buf, sizeof(buf), unit[0] != '\0' ? "%.*f %s" : "%.*f%s", precision, v, unit);
     return std::string(buf);
   };
   row("pairs", std::to_string(r.pairs.size()) +
@@ -174,7 +174,7 @@ std::string EvalResultToTable(const EvalResult& r) {
        << DeltaUnitName(r.options.rpe_delta_unit) << "\n";
   }
   if (r.has_kitti) {
-    os << "KITTI segments (" << r.kitti.segments.size() << ", unaligned)\n";
+    os << "KITTI segments (" << r.kitti.segments.size() << " segments, raw estimate)\n";
     row("t_err", num(r.kitti.t_err_percent, "%", 4));
     row("r_err", num(r.kitti.r_err_deg_per_100m, "deg/100m", 4));
   } else {
