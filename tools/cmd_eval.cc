@@ -14,15 +14,18 @@
 #include "core/io/trajectory_io.h"
 #include "tools/command.h"
 
-DEFINE_string(align, "se3", "Alignment of the estimate onto the ground truth before the ATE: "
+DEFINE_string(align, "se3",
+              "Alignment of the estimate onto the ground truth before the ATE: "
               "se3 (rigid, Umeyama), sim3 (with scale, for monocular), none");
 DEFINE_double(delta, 1.0, "RPE step, in --delta_unit");
 DEFINE_string(delta_unit, "f", "Unit of the RPE step: f (frames) or m (metres of path)");
-DEFINE_double(max_diff, 0.01, "Maximum time difference in seconds for two stamps to be "
+DEFINE_double(max_diff, 0.01,
+              "Maximum time difference in seconds for two stamps to be "
               "associated (TUM/evo association)");
 DEFINE_string(plot, "", "Write a PNG plot (top view and ATE along the path) to this file");
 DEFINE_bool(json, false, "Print one JSON object on stdout instead of the table");
-DEFINE_string(times, "", "KITTI times.txt (one time in seconds per line) applied to the KITTI "
+DEFINE_string(times, "",
+              "KITTI times.txt (one time in seconds per line) applied to the KITTI "
               "file(s), which have no stamps, so that they associate by time");
 DEFINE_string(format_gt, "auto", "Format of the ground truth file: auto, tum, kitti, euroc");
 DEFINE_string(format_est, "auto", "Format of the estimate file: auto, tum, kitti, euroc");
@@ -88,23 +91,22 @@ int RunEval(const std::vector<std::string>& args) {
   return 0;
 }
 
-const CommandRegistrar registrar({
-    "eval",
-    "compare a trajectory with ground truth (ATE, RPE, KITTI segment errors)",
-    "dala eval GT EST [--align se3|sim3|none] [--delta N --delta_unit f|m] [--max_diff S]\n"
-    "                 [--plot FILE.png] [--json] [--times TIMES.txt]\n"
-    "                 [--format_gt auto|tum|kitti|euroc] [--format_est ...]\n\n"
-    "Formats are detected from the content (TUM, KITTI, EuRoC csv). Timestamped files are\n"
-    "associated by time (closest stamps within --max_diff, each used once); KITTI files, which\n"
-    "have no stamps, pair row by row (equal lengths) unless --times gives their stamps.\n"
-    "Metrics (docs/evaluation.md): ATE after alignment (evo_ape), RPE over --delta (evo_rpe,\n"
-    "consecutive pairs), and the KITTI devkit segment errors (100..800 m, unaligned) when the\n"
-    "path is long enough. Dashes and underscores in flag names are equivalent.\n\n"
-    "examples:\n"
-    "  dala eval poses/00.txt results/00.txt --plot 00.png\n"
-    "  dala eval groundtruth.txt traj.txt --align sim3 --max_diff 0.02 --json\n"
-    "  dala eval data.csv traj.txt --delta 1 --delta_unit m",
-    &RunEval, __FILE__});
+const CommandRegistrar registrar(
+    {"eval", "compare a trajectory with ground truth (ATE, RPE, KITTI segment errors)",
+     "dala eval GT EST [--align se3|sim3|none] [--delta N --delta_unit f|m] [--max_diff S]\n"
+     "                 [--plot FILE.png] [--json] [--times TIMES.txt]\n"
+     "                 [--format_gt auto|tum|kitti|euroc] [--format_est ...]\n\n"
+     "Formats are detected from the content (TUM, KITTI, EuRoC csv). Timestamped files are\n"
+     "associated by time (closest stamps within --max_diff, each used once); KITTI files, which\n"
+     "have no stamps, pair row by row (equal lengths) unless --times gives their stamps.\n"
+     "Metrics (docs/evaluation.md): ATE after alignment (evo_ape), RPE over --delta (evo_rpe,\n"
+     "consecutive pairs), and the KITTI devkit segment errors (100..800 m, unaligned) when the\n"
+     "path is long enough. Dashes and underscores in flag names are equivalent.\n\n"
+     "examples:\n"
+     "  dala eval poses/00.txt results/00.txt --plot 00.png\n"
+     "  dala eval groundtruth.txt traj.txt --align sim3 --max_diff 0.02 --json\n"
+     "  dala eval data.csv traj.txt --delta 1 --delta_unit m",
+     &RunEval, __FILE__});
 
 }  // namespace
 }  // namespace dala

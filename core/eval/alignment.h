@@ -1,10 +1,9 @@
 #ifndef DALA_CORE_EVAL_ALIGNMENT_H_
 #define DALA_CORE_EVAL_ALIGNMENT_H_
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/geometry.h"
 #include "core/trajectory.h"

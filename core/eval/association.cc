@@ -29,9 +29,8 @@ std::vector<PoseMatch> AssociateByTime(const Trajectory& gt, const Trajectory& e
   // Ground truth indices sorted by time (the readers give sorted stamps; do not rely on it).
   std::vector<size_t> gt_order(gt.size());
   std::iota(gt_order.begin(), gt_order.end(), size_t{0});
-  std::stable_sort(gt_order.begin(), gt_order.end(), [&](size_t a, size_t b) {
-    return gt.poses[a].t_ns < gt.poses[b].t_ns;
-  });
+  std::stable_sort(gt_order.begin(), gt_order.end(),
+                   [&](size_t a, size_t b) { return gt.poses[a].t_ns < gt.poses[b].t_ns; });
   std::vector<int64_t> gt_t(gt.size());
   for (size_t k = 0; k < gt_order.size(); ++k) gt_t[k] = gt.poses[gt_order[k]].t_ns;
 

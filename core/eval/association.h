@@ -29,7 +29,7 @@ std::vector<PoseMatch> AssociateByTime(const Trajectory& gt, const Trajectory& e
 // The two trajectories reduced to their associated pairs, in the order of the estimate.
 struct PairedPoses {
   std::vector<PoseMatch> matches;
-  std::vector<int64_t> t_ns;  // Stamp of each pair: the estimate's (or its row index for KITTI).
+  std::vector<int64_t> t_ns;    // Stamp of each pair: the estimate's (or its row index for KITTI).
   std::vector<Pose> T_w_c_gt;   // Ground truth pose of the pair, in the ground truth world.
   std::vector<Pose> T_w_c_est;  // Estimated pose of the pair, in the estimate's world.
   bool by_index = false;        // True when paired by row index (KITTI, no timestamps).

@@ -14,7 +14,7 @@ namespace dala {
 //   rotation error    a_i = angle(R_gt_i^T * R_est_i)                (degrees, in [0, 180])
 // This is evo_ape's "translation part" and "rotation angle" relations.
 struct AteResult {
-  std::vector<double> translation_errors;  // One per pair, metres.
+  std::vector<double> translation_errors;   // One per pair, metres.
   std::vector<double> rotation_errors_deg;  // One per pair, degrees.
   ErrorStatistics translation;
   ErrorStatistics rotation_deg;

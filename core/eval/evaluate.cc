@@ -63,8 +63,8 @@ EvalResult Evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   r.ate = ComputeAte(r.pairs.T_w_c_gt, T_w_c_aligned);
   // RPE is invariant to the rigid part of the alignment; use the aligned estimate so that a
   // Sim(3) scale applies (what evo_rpe -as does).
-  r.has_rpe = ComputeRpe(r.pairs.T_w_c_gt, T_w_c_aligned, options.rpe_delta,
-                         options.rpe_delta_unit, &r.rpe);
+  r.has_rpe = ComputeRpe(r.pairs.T_w_c_gt, T_w_c_aligned, options.rpe_delta, options.rpe_delta_unit,
+                         &r.rpe);
   // The devkit scores the raw estimate (no scale correction).
   if (options.kitti_segments) {
     r.has_kitti =
@@ -144,10 +144,10 @@ std::string EvalResultToTable(const EvalResult& r) {
     std::snprintf(buf, sizeof(buf), unit[0] != '\0' ? "%.*f %s" : "%.*f%s", precision, v, unit);
     return std::string(buf);
   };
-  row("pairs", std::to_string(r.pairs.size()) +
-                   (r.pairs.by_index ? " (by index)"
-                                     : " (by time, max diff " +
-                                           num(r.options.max_time_diff_s, "s)", 3)));
+  row("pairs",
+      std::to_string(r.pairs.size()) +
+          (r.pairs.by_index ? " (by index)"
+                            : " (by time, max diff " + num(r.options.max_time_diff_s, "s)", 3)));
   row("path length (gt)", num(r.gt_path_length_m, "m", 3));
   row("alignment", AlignmentTypeName(r.options.alignment));
   row("scale", num(r.alignment.scale, ""));

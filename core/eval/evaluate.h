@@ -13,10 +13,9 @@
 //   else std::cout << EvalResultToJson(r).dump(2);
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/eval/alignment.h"
 #include "core/eval/association.h"
@@ -48,8 +47,8 @@ struct EvalResult {
   std::string error;  // Why, naming sizes, time ranges and the option to change.
 
   EvalOptions options;
-  PairedPoses pairs;                 // Associated poses (estimate not aligned).
-  Sim3Alignment alignment;           // Estimate world -> ground truth world (identity for none).
+  PairedPoses pairs;                    // Associated poses (estimate not aligned).
+  Sim3Alignment alignment;              // Estimate world -> ground truth world (identity for none).
   std::vector<double> pair_distance_m;  // Ground truth path length up to each pair (plots).
   double gt_path_length_m = 0.0;        // Along the paired ground truth poses.
   double est_path_length_m = 0.0;       // Along the paired, aligned (scaled) estimate.

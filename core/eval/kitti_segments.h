@@ -24,7 +24,7 @@ namespace dala {
 std::vector<double> KittiDevkitLengths();
 
 struct KittiSegmentOptions {
-  int step_frames = 10;  // First frames are 0, step, 2 step, ...
+  int step_frames = 10;                                  // First frames are 0, step, 2 step, ...
   std::vector<double> lengths_m = KittiDevkitLengths();  // Segment lengths, metres.
 };
 
@@ -32,7 +32,7 @@ struct KittiSegment {
   size_t first = 0;
   size_t last = 0;
   double length_m = 0.0;
-  double t_err = 0.0;        // |t(E)| / L, metres per metre.
+  double t_err = 0.0;            // |t(E)| / L, metres per metre.
   double r_err_rad_per_m = 0.0;  // angle(E) / L.
 };
 
@@ -46,8 +46,8 @@ struct KittiLengthError {
 struct KittiSegmentResult {
   std::vector<KittiSegment> segments;
   std::vector<KittiLengthError> per_length;  // Only lengths with at least one segment.
-  double t_err_percent = 0.0;       // 100 * mean(t_err).
-  double r_err_deg_per_100m = 0.0;  // 100 * 180/pi * mean(r_err).
+  double t_err_percent = 0.0;                // 100 * mean(t_err).
+  double r_err_deg_per_100m = 0.0;           // 100 * 180/pi * mean(r_err).
 };
 
 // Computes the segment errors of paired poses (same length, CHECKed). Returns false when the

@@ -20,9 +20,9 @@ namespace {
 const cv::Scalar kBlack(0, 0, 0);
 const cv::Scalar kGrid(225, 225, 225);
 const cv::Scalar kAxisText(40, 40, 40);
-const cv::Scalar kGtColour(60, 60, 60);        // Dark grey.
-const cv::Scalar kEstColour(180, 105, 30);     // Blue (BGR).
-const cv::Scalar kErrorColour(40, 40, 200);    // Red (BGR).
+const cv::Scalar kGtColour(60, 60, 60);      // Dark grey.
+const cv::Scalar kEstColour(180, 105, 30);   // Blue (BGR).
+const cv::Scalar kErrorColour(40, 40, 200);  // Red (BGR).
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 constexpr int kShift = 4;  // Sub-pixel drawing: coordinates in 1/16 pixel.
 constexpr double kSubPixel = 16.0;
@@ -89,8 +89,8 @@ struct Axes {
     const double label_scale = 0.45;
     for (double x = std::ceil(x0 / sx) * sx; x <= x1 + 1e-9 * sx; x += sx) {
       const cv::Point2d p = Map(x, y0);
-      cv::line(*img, ToFixed({p.x, static_cast<double>(area.y)}), ToFixed(p), kGrid, 1,
-               cv::LINE_AA, kShift);
+      cv::line(*img, ToFixed({p.x, static_cast<double>(area.y)}), ToFixed(p), kGrid, 1, cv::LINE_AA,
+               kShift);
       cv::line(*img, ToFixed(p), ToFixed({p.x, p.y + 6}), kBlack, 1, cv::LINE_AA, kShift);
       const std::string label = TickLabel(x, sx);
       const cv::Size s = TextSize(label, label_scale);
@@ -100,8 +100,8 @@ struct Axes {
     int widest = 0;
     for (double y = std::ceil(y0 / sy) * sy; y <= y1 + 1e-9 * sy; y += sy) {
       const cv::Point2d p = Map(x0, y);
-      cv::line(*img, ToFixed(p), ToFixed({static_cast<double>(area.x + area.width), p.y}), kGrid,
-               1, cv::LINE_AA, kShift);
+      cv::line(*img, ToFixed(p), ToFixed({static_cast<double>(area.x + area.width), p.y}), kGrid, 1,
+               cv::LINE_AA, kShift);
       cv::line(*img, ToFixed({p.x - 6, p.y}), ToFixed(p), kBlack, 1, cv::LINE_AA, kShift);
       const std::string label = TickLabel(y, sy);
       const cv::Size s = TextSize(label, label_scale);
@@ -193,8 +193,8 @@ void PlotEvaluation(const Trajectory& gt, const Trajectory& aligned_est, const E
   const double margin = 0.04;
   double rx = std::max(hi[ax] - lo[ax], 1e-3);
   double ry = std::max(hi[ay] - lo[ay], 1e-3);
-  const double ppm = std::min(top.area.width / (rx * (1 + 2 * margin)),
-                              top.area.height / (ry * (1 + 2 * margin)));
+  const double ppm =
+      std::min(top.area.width / (rx * (1 + 2 * margin)), top.area.height / (ry * (1 + 2 * margin)));
   const double cx = 0.5 * (lo[ax] + hi[ax]);
   const double cy = 0.5 * (lo[ay] + hi[ay]);
   top.x0 = cx - 0.5 * top.area.width / ppm;
@@ -202,37 +202,43 @@ void PlotEvaluation(const Trajectory& gt, const Trajectory& aligned_est, const E
   top.y0 = cy - 0.5 * top.area.height / ppm;
   top.y1 = cy + 0.5 * top.area.height / ppm;
   char title[200];
-  std::snprintf(title, sizeof(title), "Top view (%s-%s), %s alignment%s, ATE RMSE %.4g m",
-                AxisName(ax), AxisName(ay), AlignmentTypeName(result.options.alignment),
-                result.options.alignment == AlignmentType::kSim3
-                    ? (" (scale " + std::to_string(result.alignment.scale).substr(0, 6) + ")")
-                          .c_str()
-                    : "",
-                result.ate.translation.rmse);
+  std::snprintf(
+      title, sizeof(title), "Top view (%s-%s), %s%s, ATE RMSE %.4g m", AxisName(ax), AxisName(ay),
+      result.options.alignment == AlignmentType::kNone
+          ? "no alignment"
+          : (std::string(AlignmentTypeName(result.options.alignment)) + " alignment").c_str(),
+      result.options.alignment == AlignmentType::kSim3
+          ? (" (scale " + std::to_string(result.alignment.scale).substr(0, 6) + ")").c_str()
+          : "",
+      result.ate.translation.rmse);
   top.Draw(&img, std::string(AxisName(ax)) + " [m]", std::string(AxisName(ay)) + " [m]", title);
   const auto project = [&](const Trajectory& t) {
     std::vector<cv::Point2d> pts;
-    for (const StampedPose& p : t.poses) pts.emplace_back(p.T_w_c.translation()[ax],
-                                                         p.T_w_c.translation()[ay]);
+    for (const StampedPose& p : t.poses)
+      pts.emplace_back(p.T_w_c.translation()[ax], p.T_w_c.translation()[ay]);
     return pts;
   };
   const std::vector<cv::Point2d> gt_pts = project(gt);
   const std::vector<cv::Point2d> est_pts = project(aligned_est);
   top.Polyline(&img, gt_pts, kGtColour, 2);
   if (!est_pts.empty()) top.Polyline(&img, est_pts, kEstColour, 2);
-  // Start markers: a filled circle on each trajectory's first pose.
-  cv::circle(img, ToFixed(top.Map(gt_pts.front().x, gt_pts.front().y)), 6 * 16, kGtColour,
-             cv::FILLED, cv::LINE_AA, kShift);
-  if (!est_pts.empty()) {
-    cv::circle(img, ToFixed(top.Map(est_pts.front().x, est_pts.front().y)), 4 * 16, kEstColour,
-               cv::FILLED, cv::LINE_AA, kShift);
-  }
-  Legend(&img, {top.area.x + top.area.width - 8, top.area.y + 8},
-         {{"ground truth", kGtColour},
-          {std::string("estimate (") + AlignmentTypeName(result.options.alignment) + " aligned)",
-           kEstColour}});
+  // Start markers: a ring in each trajectory's colour on its first pose.
+  const auto start_marker = [&](const cv::Point2d& p, const cv::Scalar& colour) {
+    const cv::Point c = ToFixed(top.Map(p.x, p.y));
+    cv::circle(img, c, 8 * 16, cv::Scalar::all(255), cv::FILLED, cv::LINE_AA, kShift);
+    cv::circle(img, c, 8 * 16, colour, 3, cv::LINE_AA, kShift);
+  };
+  start_marker(gt_pts.front(), kGtColour);
+  if (!est_pts.empty()) start_marker(est_pts.front(), kEstColour);
+  Legend(
+      &img, {top.area.x + top.area.width - 8, top.area.y + 8},
+      {{"ground truth", kGtColour},
+       {result.options.alignment == AlignmentType::kNone
+            ? std::string("estimate (not aligned)")
+            : std::string("estimate (") + AlignmentTypeName(result.options.alignment) + " aligned)",
+        kEstColour}});
   {
-    const std::string note = "filled circles: start";
+    const std::string note = "rings: start";
     PutText(&img, note, {top.area.x + 8, top.area.y + top.area.height - 10}, 0.45,
             cv::Scalar::all(110));
   }
@@ -251,16 +257,18 @@ void PlotEvaluation(const Trajectory& gt, const Trajectory& aligned_est, const E
   bottom.x1 = std::max(series.back().x, 1e-3);
   bottom.y0 = 0.0;
   bottom.y1 = std::max(result.ate.translation.max * 1.1, 1e-6);
-  std::snprintf(title, sizeof(title),
-                "ATE translation error per pair (%zu pairs): mean %.4g m, median %.4g m, max %.4g m",
-                errors.size(), result.ate.translation.mean, result.ate.translation.median,
-                result.ate.translation.max);
+  std::snprintf(
+      title, sizeof(title),
+      "ATE translation error per pair (%zu pairs): mean %.4g m, median %.4g m, max %.4g m",
+      errors.size(), result.ate.translation.mean, result.ate.translation.median,
+      result.ate.translation.max);
   bottom.Draw(&img, by_distance ? "distance travelled along the ground truth [m]" : "pair index",
               "ATE [m]", title);
   DashedHorizontal(&img, bottom, result.ate.translation.rmse, kBlack);
   bottom.Polyline(&img, series, kErrorColour, 1);
   char rmse_label[64];
-  std::snprintf(rmse_label, sizeof(rmse_label), "RMSE %.4g m (dashed)", result.ate.translation.rmse);
+  std::snprintf(rmse_label, sizeof(rmse_label), "RMSE %.4g m (dashed)",
+                result.ate.translation.rmse);
   Legend(&img, {bottom.area.x + bottom.area.width - 8, bottom.area.y + 8},
          {{"ATE", kErrorColour}, {rmse_label, kBlack}});
 

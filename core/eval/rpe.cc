@@ -49,8 +49,8 @@ std::vector<std::pair<size_t, size_t>> RpeIndexPairs(const std::vector<Pose>& T_
   return pairs;
 }
 
-bool ComputeRpe(const std::vector<Pose>& T_w_c_gt, const std::vector<Pose>& T_w_c_est,
-                double delta, DeltaUnit unit, RpeResult* rpe) {
+bool ComputeRpe(const std::vector<Pose>& T_w_c_gt, const std::vector<Pose>& T_w_c_est, double delta,
+                DeltaUnit unit, RpeResult* rpe) {
   CHECK(rpe != nullptr);
   CHECK_EQ(T_w_c_gt.size(), T_w_c_est.size()) << "RPE needs paired poses";
   *rpe = RpeResult();

@@ -41,8 +41,8 @@ std::vector<std::pair<size_t, size_t>> RpeIndexPairs(const std::vector<Pose>& T_
 
 // Computes the RPE of paired poses (same length, CHECKed). Returns false when delta gives no
 // pair (the trajectory is shorter than two steps); `rpe` then holds no errors.
-bool ComputeRpe(const std::vector<Pose>& T_w_c_gt, const std::vector<Pose>& T_w_c_est,
-                double delta, DeltaUnit unit, RpeResult* rpe);
+bool ComputeRpe(const std::vector<Pose>& T_w_c_gt, const std::vector<Pose>& T_w_c_est, double delta,
+                DeltaUnit unit, RpeResult* rpe);
 
 }  // namespace dala
 

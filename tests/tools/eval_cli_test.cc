@@ -97,8 +97,8 @@ TEST_F(EvalCli, PlotWritesAPng) {
 TEST_F(EvalCli, KittiFilesPairByIndexOrThroughTimes) {
   WriteTrajectoryKitti(dir_ / "gt_kitti.txt", gt_);
   WriteTrajectoryKitti(dir_ / "est_kitti.txt", est_);
-  const CliResult ok = RunDala(
-      "eval " + dir_ / "gt_kitti.txt" + " " + dir_ / "est_kitti.txt" + " --json", dir_);
+  const CliResult ok =
+      RunDala("eval " + dir_ / "gt_kitti.txt" + " " + dir_ / "est_kitti.txt" + " --json", dir_);
   ASSERT_EQ(ok.status, 0) << ok.err;
   EXPECT_EQ(nlohmann::json::parse(ok.out).at("paired_by").get<std::string>(), "index");
   // Lengths differ: a clear error naming both sizes and --times.

@@ -36,8 +36,8 @@ TEST(EvalReference, Kitti00OrbSe3) {
   EXPECT_GT(r.kitti.t_err_percent, 0.2);
   EXPECT_LT(r.kitti.t_err_percent, 3.0);
   std::cout << "ORB kitti t_err " << r.kitti.t_err_percent << " % r_err "
-            << r.kitti.r_err_deg_per_100m << " deg/100m, rpe trans rmse "
-            << r.rpe.translation.rmse << "\n";
+            << r.kitti.r_err_deg_per_100m << " deg/100m, rpe trans rmse " << r.rpe.translation.rmse
+            << "\n";
 }
 
 TEST(EvalReference, Kitti00SptamSe3) {
