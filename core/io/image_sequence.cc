@@ -126,7 +126,7 @@ std::vector<std::optional<Pose>> GroundTruthAtTimes(const Trajectory& ground_tru
                                                     const std::vector<int64_t>& t_ns,
                                                     int64_t max_gap_ns) {
   // EuRoC stamps pass through a double on reading (~128 ns rounding at epoch times): a frame
-  // this close outside the range takes the end sample.
+  // this close outside the range takes the end sample, and gaps get the same slack.
   constexpr int64_t kEdgeToleranceNs = 1000000;
   std::vector<std::optional<Pose>> out(t_ns.size());
   const auto& poses = ground_truth.poses;
@@ -153,7 +153,7 @@ std::vector<std::optional<Pose>> GroundTruthAtTimes(const Trajectory& ground_tru
       continue;
     }
     const StampedPose& a = *(it - 1);
-    if (b.t_ns - a.t_ns > max_gap_ns) continue;
+    if (b.t_ns - a.t_ns > max_gap_ns + kEdgeToleranceNs) continue;
     const double s = static_cast<double>(t - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
     out[i] = InterpolatePose(a.T_w_c, b.T_w_c, s);
   }
