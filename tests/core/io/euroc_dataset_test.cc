@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <iostream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -269,6 +270,9 @@ TEST(EurocDataset, RealV101RectifiedRowsAlign) {
   EXPECT_GE(aligned, static_cast<int>(0.9 * dy.size()));
   EXPECT_LT(std::abs(Median(dy)), 0.5);
   EXPECT_GT(Median(disparities), 0.0);  // Right camera at +x: points move left.
+  std::cout << "[ measured ] rectified: " << dy.size() << " matches, " << aligned
+            << " with |dy| < 1 px, median dy " << Median(dy) << " px, baseline " << rig.baseline
+            << " m, fx " << rig.left.fx << "\n";
 
   // The raw images are not row-aligned (cy differs by ~7 px and the lenses distort): without
   // rectification the same check fails, so it does test the rectification.
@@ -278,6 +282,7 @@ TEST(EurocDataset, RealV101RectifiedRowsAlign) {
   const std::vector<double> raw_dy = VerticalOffsets(raw0, raw1, nullptr);
   ASSERT_GE(raw_dy.size(), 5u);
   EXPECT_GT(std::abs(Median(raw_dy)), 2.0);
+  std::cout << "[ measured ] raw: median dy " << Median(raw_dy) << " px\n";
 
   // Ground truth: the rectified camera sits where cam0 is on the body (rectification only
   // rotates), and its z axis (forward) is within a few degrees of cam0's.
