@@ -23,7 +23,8 @@ void WriteText(const std::string& path, const std::string& text) {
 Trajectory RandomTrajectory(int n) {
   std::mt19937 rng(7);
   Trajectory t;
-  for (int i = 0; i < n; ++i) t.Add(1403715524907143168LL + i * 50000000LL, testing::RandomPose(rng));
+  for (int i = 0; i < n; ++i)
+    t.Add(1403715524907143168LL + i * 50000000LL, testing::RandomPose(rng));
   return t;
 }
 
