@@ -1,0 +1,75 @@
+#ifndef DALA_CORE_FRAME_MEASUREMENT_H_
+#define DALA_CORE_FRAME_MEASUREMENT_H_
+
+// FrameMeasurement: the one message from the frontend to every estimator (DESIGN.md). The
+// frontend fills it; estimators (sliding-window BA, stereo EKF, mono EKF) read it and nothing
+// else, so they are compared on identical measurements.
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/geometry.h"
+#include "core/types.h"
+
+namespace dala {
+
+// One interest point of the current frame that belongs to a track. `landmark` follows the
+// physical point for as long as it is tracked (and again after a loop is recognised).
+struct FeatureObservation {
+  LandmarkId landmark;
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // Left rectified image, pixels.
+  double sigma_px = 1.0;                         // Std. dev. of uv (and of u_right), pixels.
+  // Stereo only: the right-image abscissa (same row, rectified) and the triangulated point
+  // in the current left camera frame with its first-order covariance.
+  std::optional<double> u_right;
+  Eigen::Vector3d p_c0 = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d cov_p_c0 = Eigen::Matrix3d::Zero();
+  int track_length = 1;  // Frames this landmark has been seen in, this one included.
+
+  bool has_stereo() const { return u_right.has_value(); }
+  double disparity() const { return uv.x() - *u_right; }
+};
+
+enum class TrackingStatus {
+  kInitializing,  // First frame (or first after a reset): no motion yet.
+  kTracking,      // Motion estimated from enough inliers.
+  kLost,          // Too few matches or a degenerate motion: no motion estimate this frame.
+};
+const char* TrackingStatusName(TrackingStatus status);
+
+// The visual motion estimate between the previous processed frame and this one.
+struct MotionEstimate {
+  // T_prev_cur maps points of the current left camera frame into the previous one.
+  Pose T_prev_cur = Pose::Identity();
+  // Covariance of delta in T_prev_cur = T_hat * Exp(delta), delta = [rotation; translation].
+  Matrix6d cov = Matrix6d::Identity();
+  int inliers = 0;
+  int correspondences = 0;
+  // Monocular motion (essential matrix): the translation is a unit direction, scale unknown.
+  bool scale_known = true;
+};
+
+// Time spent in each frontend stage for this frame, milliseconds.
+struct FrontendTimings {
+  double detect_ms = 0, stereo_ms = 0, track_ms = 0, motion_ms = 0, total_ms = 0;
+};
+
+struct FrameMeasurement {
+  FrameId frame;
+  int64_t t_ns = 0;
+  bool stereo = false;
+  TrackingStatus status = TrackingStatus::kInitializing;
+  std::vector<FeatureObservation> observations;
+  std::optional<MotionEstimate> motion;  // Absent on the first frame and when lost.
+  bool is_keyframe = false;
+  // Frames since the last keyframe and this frame's tracked fraction of that keyframe's points.
+  double tracked_fraction = 1.0;
+  FrontendTimings timings;
+};
+
+}  // namespace dala
+
+#endif  // DALA_CORE_FRAME_MEASUREMENT_H_
