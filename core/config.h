@@ -17,7 +17,8 @@
 //   root.CheckNoUnknownKeys();                          // after all children were asked for
 //
 // A ConfigNode is a cheap handle: copies share the underlying file and the record of the keys
-// read. Not thread-safe.
+// read. Each Child() call starts a fresh record, so take a section's node once and pass it
+// around. Not thread-safe.
 
 #include <cstdint>
 #include <memory>

@@ -1,6 +1,7 @@
 #include "core/io/text_lines.h"
 
 #include <cctype>
+#include <charconv>
 #include <cerrno>
 #include <cstdint>
 #include <cmath>
@@ -85,6 +86,17 @@ int64_t ParseSecondsAsNs(const std::string& path, int line, const std::string& f
   }
   if (keep >= 0 && keep < static_cast<int>(digits.size()) && digits[keep] >= '5') ++ns;
   return negative ? -ns : ns;
+}
+
+int64_t ParseInt64(const std::string& path, int line, const std::string& field) {
+  int64_t value = 0;
+  const char* end = field.data() + field.size();
+  const auto [ptr, ec] = std::from_chars(field.data(), end, value);
+  if (ec != std::errc() || ptr != end) {
+    throw Error() << path << ":" << line << ": '" << field
+                  << "' is not an integer (expected nanoseconds)";
+  }
+  return value;
 }
 
 std::vector<double> ParseNumbers(const std::string& path, const NumberedLine& line) {

@@ -31,6 +31,10 @@ std::vector<std::string> SplitFields(const std::string& text);
 // dala::Error naming path:line when the field is not a number.
 int64_t ParseSecondsAsNs(const std::string& path, int line, const std::string& field);
 
+// Parses a whole decimal integer exactly (e.g. EuRoC nanosecond stamps); dala::Error naming
+// path:line otherwise.
+int64_t ParseInt64(const std::string& path, int line, const std::string& field);
+
 }  // namespace dala
 
 #endif  // DALA_CORE_IO_TEXT_LINES_H_

@@ -97,7 +97,8 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format) {
           throw Error() << path << ":" << line.number << ": expected at least 8 columns "
                                << "(EuRoC: t_ns, px, py, pz, qw, qx, qy, qz), got " << v.size();
         }
-        const int64_t t_ns = static_cast<int64_t>(std::llround(v[0]));
+        // Integer nanoseconds: parsed exactly (a double keeps only ~16 digits of 19).
+        const int64_t t_ns = ParseInt64(path, line.number, SplitFields(line.text)[0]);
         CheckIncreasing(path, line.number, traj, t_ns);
         traj.Add(t_ns, MakePose(CheckedQuaternion(path, line.number, v[5], v[6], v[7], v[4]),
                                 Eigen::Vector3d(v[1], v[2], v[3])));

@@ -23,7 +23,8 @@ void WriteText(const std::string& path, const std::string& text) {
 Trajectory RandomTrajectory(int n) {
   std::mt19937 rng(7);
   Trajectory t;
-  for (int i = 0; i < n; ++i) t.Add(1403715524907143168LL + i * 50000000LL, testing::RandomPose(rng));
+  for (int i = 0; i < n; ++i)
+    t.Add(1403715524907143168LL + i * 50000000LL, testing::RandomPose(rng));
   return t;
 }
 
@@ -64,11 +65,13 @@ TEST(TrajectoryIo, EurocCsvReadsWxyzOrder) {
   WriteText(dir / "gt.csv",
             "#timestamp, p_x, p_y, p_z, q_w, q_x, q_y, q_z\n"
             "1000,1,2,3,0.7071067811865476,0,0,0.7071067811865476,9,9\n"
-            "2000,1,2,4,1,0,0,0\n");
+            "2000,1,2,4,1,0,0,0\n"
+            "1403715524907143168,1,2,4,1,0,0,0\n");
   EXPECT_EQ(DetectTrajectoryFormat(dir / "gt.csv"), TrajectoryFormat::kEurocCsv);
   const Trajectory r = ReadTrajectory(dir / "gt.csv");
-  ASSERT_EQ(r.size(), 2u);
+  ASSERT_EQ(r.size(), 3u);
   EXPECT_EQ(r.poses[0].t_ns, 1000);
+  EXPECT_EQ(r.poses[2].t_ns, 1403715524907143168LL);  // Exact: no double round trip.
   EXPECT_NEAR(LogSO3(r.poses[0].T_w_c.linear()).z(), M_PI / 2, 1e-9);
 }
 

@@ -1,0 +1,89 @@
+#ifndef DALA_CORE_IO_DATASET_H_
+#define DALA_CORE_IO_DATASET_H_
+
+// Reading image sequences: KITTI odometry, EuRoC ASL, TUM RGB-D and the synthetic sequences
+// `dala synth` writes. docs/datasets.md describes the folder layouts, the frames of the ground
+// truth and the calibration override.
+//
+// Every reader hands out the same thing: rectified (stereo) or undistorted (mono) grayscale
+// frames, a distortion-free StereoRig describing them, and the ground truth of the left rectified
+// camera T_w_c0 at the frame times when the dataset has one.
+//
+//   std::unique_ptr<Dataset> dataset = OpenDataset("/data/kitti/sequences/06");
+//   Frame frame;
+//   while (dataset->Next(&frame)) { ... }
+//
+// Errors in the folder (missing or malformed files, wrong image sizes, unreadable images) throw
+// dala::Error naming the file (and line) and the fix. Not thread-safe.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "core/camera.h"
+#include "core/trajectory.h"
+#include "core/types.h"
+
+namespace dala {
+
+enum class DatasetFormat { kAuto, kKitti, kEuroc, kTum, kSynthetic };
+
+const char* DatasetFormatName(DatasetFormat format);
+// Parses "auto", "kitti", "euroc", "tum", "synthetic"; throws dala::Error naming the accepted
+// values.
+DatasetFormat ParseDatasetFormat(const std::string& name);
+
+// A sequence of frames, yielded in time order.
+class Dataset {
+ public:
+  virtual ~Dataset() = default;
+  virtual DatasetFormat format() const = 0;
+  virtual const std::string& path() const = 0;
+  virtual bool is_stereo() const = 0;
+  // The rectified rig the frames are expressed in (no distortion); mono: baseline 0.
+  virtual const StereoRig& rig() const = 0;
+  // Number of frames Next() yields from a Rewind().
+  virtual size_t size() const = 0;
+  // Loads the next frame; false at the end. Frame ids are the frame's index in the whole
+  // sequence (so with DatasetOptions::first_frame = 10 the first id is 10). Throws dala::Error on
+  // an unreadable image or one of the wrong size.
+  virtual bool Next(Frame* frame) = 0;
+  virtual void Rewind() = 0;
+  // Ground truth T_w_c0 (the rectified left camera in the dataset's world frame) at the times of
+  // the frames that have one (a subset, in order), when the dataset has ground truth.
+  virtual const std::optional<Trajectory>& ground_truth() const = 0;
+};
+
+struct DatasetOptions {
+  // kAuto detects the format from the folder content (see DetectDatasetFormat).
+  DatasetFormat format = DatasetFormat::kAuto;
+  // Read only the left camera of a stereo dataset (the rig then has baseline 0).
+  bool force_mono = false;
+  // A YAML file (fx fy cx cy width height [baseline] [k1 k2 p1 p2 k3]) that replaces the
+  // dataset's calibration (KITTI calib.txt, synthetic, TUM intrinsics). Not used for EuRoC, whose
+  // sensor.yaml files are needed for rectification. Empty: the dataset's own calibration.
+  std::string calibration_yaml;
+  // Skip the frames before this index.
+  int first_frame = 0;
+  // Yield at most this many frames; 0 for all.
+  int max_frames = 0;
+  // Ground truth is interpolated at a frame time only between two samples closer than this
+  // (EuRoC has 200 Hz, TUM 100 Hz ground truth); a frame in a larger gap gets none.
+  double max_ground_truth_gap_s = 0.1;
+
+  bool IsValid(std::string* why) const;
+};
+
+// Opens a dataset folder. Throws dala::Error on invalid options or a malformed folder.
+std::unique_ptr<Dataset> OpenDataset(const std::string& folder,
+                                     const DatasetOptions& options = DatasetOptions());
+
+// Detects the format from the folder content: `synth.yaml` -> synthetic, `image_0/` -> KITTI,
+// `mav0/` or `cam0/sensor.yaml` -> EuRoC, `rgb.txt` -> TUM. Throws dala::Error listing what was
+// looked for when nothing matches.
+DatasetFormat DetectDatasetFormat(const std::string& folder);
+
+}  // namespace dala
+
+#endif  // DALA_CORE_IO_DATASET_H_

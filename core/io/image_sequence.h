@@ -1,0 +1,61 @@
+#ifndef DALA_CORE_IO_IMAGE_SEQUENCE_H_
+#define DALA_CORE_IO_IMAGE_SEQUENCE_H_
+
+// The common form each dataset reader reduces a folder to, the Dataset that plays it, and the
+// helpers the readers share (image loading with checks, ground-truth interpolation, undistortion).
+// Internal to core/io: the public entry point is OpenDataset (core/io/dataset.h).
+
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/io/dataset.h"
+#include "core/trajectory.h"
+
+namespace dala {
+
+struct ImageSequence {
+  DatasetFormat format = DatasetFormat::kAuto;
+  std::string path;
+  StereoRig rig;      // Of the images Next() yields (after remapping): no distortion.
+  cv::Size raw_size;  // Size of every image file on disk.
+  std::string
+      raw_size_source;  // What fixed raw_size, for messages ("calib.txt", "the first image").
+  std::vector<int64_t> t_ns;
+  std::vector<std::string> left_files;
+  std::vector<std::string> right_files;        // Empty when monocular.
+  std::vector<std::optional<Pose>> T_w_c0_gt;  // One per frame, or empty without ground truth.
+  // Remap tables (cv::remap) from the raw to the rectified/undistorted images; empty: none.
+  cv::Mat left_map1, left_map2, right_map1, right_map2;
+};
+
+// Plays a sequence, honouring options.first_frame / max_frames. Throws dala::Error when
+// first_frame is past the end.
+std::unique_ptr<Dataset> MakeImageSequenceDataset(ImageSequence sequence,
+                                                  const DatasetOptions& options);
+
+// Reads an image as 8-bit grayscale. Throws dala::Error when it cannot be read (missing, corrupt,
+// not an image) or when `expected` is non-empty and the size differs (naming `expected_source`).
+cv::Mat LoadGrayImage(const std::string& path, const cv::Size& expected,
+                      const std::string& expected_source);
+
+// Throw dala::Error naming `what` and the fix when the folder / file is absent.
+void RequireFolder(const std::string& path, const std::string& what);
+void RequireFile(const std::string& path, const std::string& what);
+
+// Ground truth at each time by InterpolatePose between the two samples around it, when they are
+// at most max_gap_ns apart; a time outside the ground truth's range (beyond a 1 ms tolerance for
+// rounded stamps) or in a larger gap gets nullopt.
+std::vector<std::optional<Pose>> GroundTruthAtTimes(const Trajectory& ground_truth,
+                                                    const std::vector<int64_t>& t_ns,
+                                                    int64_t max_gap_ns);
+
+// Maps that undistort `camera` into a distortion-free camera of the same size (returned), with
+// cv::getOptimalNewCameraMatrix(alpha = 0: only valid pixels, no black border).
+PinholeCamera MakeUndistortionMaps(const PinholeCamera& camera, cv::Mat* map1, cv::Mat* map2);
+
+}  // namespace dala
+
+#endif  // DALA_CORE_IO_IMAGE_SEQUENCE_H_
