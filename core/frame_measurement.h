@@ -64,6 +64,10 @@ struct FrameMeasurement {
   TrackingStatus status = TrackingStatus::kInitializing;
   std::vector<FeatureObservation> observations;
   std::optional<MotionEstimate> motion;  // Absent on the first frame and when lost.
+  // Motion from a motion sensor (wheel odometry, or the rendered sequences' noisy odometry)
+  // between the previous frame and this one, when the dataset has one. The System fills it;
+  // the monocular EKF uses it to fix the scale.
+  std::optional<MotionEstimate> odometry;
   bool is_keyframe = false;
   // Frames since the last keyframe and this frame's tracked fraction of that keyframe's points.
   double tracked_fraction = 1.0;

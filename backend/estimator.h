@@ -1,0 +1,62 @@
+#ifndef DALA_BACKEND_ESTIMATOR_H_
+#define DALA_BACKEND_ESTIMATOR_H_
+
+// The estimator interface: what the System (backend/system.h) drives. Every estimator takes the
+// same FrameMeasurement stream from the frontend, so benchmarks compare estimators, not frontends.
+//   SlidingWindowEstimator (backend/ba):  Ceres BA over the last keyframes + marginalisation.
+//   StereoEkfEstimator (backend/ekf):     the paper's stereo EKF-SLAM.
+//   MonoEkfEstimator (backend/ekf):       the paper's bearing-only EKF-SLAM (Gaussian-sum init).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/frame_measurement.h"
+#include "core/geometry.h"
+#include "core/trajectory.h"
+#include "core/types.h"
+
+namespace dala {
+
+// A landmark of the estimator's map, in the world frame.
+struct MapPoint {
+  LandmarkId id;
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  int observations = 0;
+};
+
+// What an estimator says about the frame it just consumed.
+struct EstimatorOutput {
+  // T_w_c0 of the frame (the world frame is the first frame's camera unless said otherwise).
+  Pose T_w_c = Pose::Identity();
+  // False when the estimator could not estimate this frame (it then extrapolates T_w_c and the
+  // trajectory records the frame as not tracked).
+  bool valid = false;
+  int landmarks_in_state = 0;  // Landmarks currently estimated (window / filter state).
+  bool loop_closed = false;    // A loop closure corrected the trajectory at this frame.
+};
+
+class Estimator {
+ public:
+  virtual ~Estimator() = default;
+
+  // "ba" or "ekf", and the mode "stereo" or "mono".
+  virtual std::string name() const = 0;
+  virtual std::string mode() const = 0;
+
+  // Consumes the next frame's measurement (frames in time order).
+  virtual EstimatorOutput Add(const FrameMeasurement& measurement) = 0;
+
+  // The estimated pose of every frame consumed so far, in order (with loop corrections applied
+  // to the past).
+  virtual Trajectory trajectory() const = 0;
+
+  // The current map.
+  virtual std::vector<MapPoint> map() const = 0;
+};
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_ESTIMATOR_H_
