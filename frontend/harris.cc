@@ -152,14 +152,19 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
     const float half_t = 0.5f * (ma + mc);
     const float dsc = std::sqrt(std::max(0.f, half_t * half_t - (ma * mc - mb * mb)));
     if (half_t - dsc < min_ratio * (half_t + dsc)) continue;
-    if (cell > 0) {
-      int& n = count[static_cast<size_t>(c.y / cell) * cells_x + c.x / cell];
-      if (n >= options.max_per_cell) continue;
-      ++n;
-    }
     // Sub-pixel: extremum of the quadratic through the 3x3 neighbourhood of R,
     // offset = -H^-1 g with central-difference gradient g and Hessian H.
-    auto R = [&](int dx, int dy) { return response.at<float>(c.y + dy, c.x + dx); };
+    // The fit is made on log R when R > 0 on the whole 3x3: the response peak is close to a
+    // Gaussian, for which the log-parabola is exact (a parabola on R itself is biased by up to
+    // 0.15 px on a symmetric junction).
+    bool use_log = true;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) use_log &= response.at<float>(c.y + dy, c.x + dx) > 0.f;
+    }
+    auto R = [&](int dx, int dy) {
+      const double r = response.at<float>(c.y + dy, c.x + dx);
+      return use_log ? std::log(r) : r;
+    };
     const double gx = 0.5 * (R(1, 0) - R(-1, 0));
     const double gy = 0.5 * (R(0, 1) - R(0, -1));
     const double hxx = R(1, 0) - 2.0 * R(0, 0) + R(-1, 0);
@@ -171,6 +176,13 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
       ox = -(hyy * gx - hxy * gy) / det;
       oy = -(hxx * gy - hxy * gx) / det;
       if (std::abs(ox) > 0.75 || std::abs(oy) > 0.75) ox = oy = 0.0;  // Fit not trustworthy.
+    }
+    if (cell > 0) {  // Bucket of the refined position (pixel x covers [x - 0.5, x + 0.5)).
+      const int bx = std::clamp(static_cast<int>(std::floor((c.x + ox + 0.5) / cell)), 0, cells_x - 1);
+      const int by = std::clamp(static_cast<int>(std::floor((c.y + oy + 0.5) / cell)), 0, cells_y - 1);
+      int& n = count[static_cast<size_t>(by) * cells_x + bx];
+      if (n >= options.max_per_cell) continue;
+      ++n;
     }
     const double m0 = mxx.at<float>(c.y, c.x), m1 = mxy.at<float>(c.y, c.x);
     const double m2 = myy.at<float>(c.y, c.x);
