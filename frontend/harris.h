@@ -54,7 +54,7 @@ struct HarrisOptions {
   int num_levels = 4;              // Pyramid levels (1 = no pyramid).
   double scale_factor = 1.41421356;  // Size ratio between consecutive levels (> 1).
   int cell_size = 32;              // Bucketing cell side (level pixels); 0 disables bucketing.
-  int max_per_cell = 3;            // Strongest points kept per cell.
+  int max_per_cell = 5;            // Strongest points kept per cell.
   int max_points = 3000;           // Cap on the total number of points (strongest first).
   int border = 8;                  // Points closer than this to the level border are dropped.
   double sigma_orientation = 2.5;  // Gaussian window of the orientation estimate (level px).

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <deque>
 #include <limits>
 #include <memory>
@@ -248,7 +249,12 @@ class Matcher {
     const InterestPoint& q = b_.points[c.j];
     const double theta0 = WrapAngle(q.orientation - p.orientation);
     const double log_s0 = std::log(q.scale / p.scale);
-    const double log_loose = std::log(o_.loose_scale);
+    // The pair's own guess as a complex number z0 = s0 e^{i theta0}; a neighbour vector pair
+    // (d_a, d_b) defines z = d_b / d_a, and w = z / z0 must be close to 1: |arg w| below
+    // loose_angle and |log |w|| below log(loose_scale) (tested without trigonometry).
+    const std::complex<double> z0 = std::polar(std::exp(log_s0), theta0);
+    const double cos_loose = std::cos(o_.loose_angle);
+    const double loose2 = o_.loose_scale * o_.loose_scale;
     struct Vote {
       Eigen::Vector2d d_a, q_b;
       double dphi, log_s;
@@ -256,32 +262,33 @@ class Matcher {
     std::vector<Vote> votes;
     for (int n : neighbours_[i]) {
       const Eigen::Vector2d d_a = a_.points[n].uv - p.uv;
-      const double len_a = d_a.norm();
-      if (len_a < 1.0) continue;
+      const double len2_a = d_a.squaredNorm();
+      if (len2_a < 1.0) continue;
       const InterestPoint& pn = a_.points[n];
-      const Vote* best = nullptr;
-      Vote vote;
+      const std::complex<double> za(d_a.x(), d_a.y());
+      bool found = false;
+      std::complex<double> best_w;
+      Eigen::Vector2d best_q;
       float best_score = -2.f;
       for (const Candidate& cn : candidates_[n]) {
-        if (cn.j == c.j) continue;
+        if (cn.j == c.j || cn.score <= best_score) continue;
         const InterestPoint& qn = b_.points[cn.j];
         const Eigen::Vector2d d_b = qn.uv - q.uv;
-        const double len_b = d_b.norm();
-        if (len_b < 1e-6) continue;
-        const double dphi =
-            WrapAngle(std::atan2(d_b.y(), d_b.x()) - std::atan2(d_a.y(), d_a.x()) - theta0);
-        const double log_s = std::log(len_b / len_a);
-        if (std::abs(dphi) > o_.loose_angle || std::abs(log_s - log_s0) > log_loose) continue;
+        const std::complex<double> w = std::complex<double>(d_b.x(), d_b.y()) / (za * z0);
+        const double abs2_w = std::norm(w);
+        if (abs2_w > loose2 || abs2_w * loose2 < 1.0) continue;
+        if (w.real() < cos_loose * std::sqrt(abs2_w)) continue;
         if (std::abs(WrapAngle(qn.orientation - pn.orientation - theta0)) > o_.loose_angle) {
           continue;
         }
-        if (cn.score > best_score) {
-          best_score = cn.score;
-          vote = {d_a, qn.uv, dphi, log_s};
-          best = &vote;
-        }
+        found = true;
+        best_score = cn.score;
+        best_w = w;
+        best_q = qn.uv;
       }
-      if (best != nullptr) votes.push_back(vote);
+      if (found) {
+        votes.push_back({d_a, best_q, std::arg(best_w), log_s0 + 0.5 * std::log(std::norm(best_w))});
+      }
     }
     if (static_cast<int>(votes.size()) < o_.min_support) return false;
     double phi = theta0, log_s = log_s0;
