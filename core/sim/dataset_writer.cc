@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
-
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.h"
@@ -35,8 +34,8 @@ void WriteCalib(const std::string& path, const SyntheticSequence& seq) {
     os << std::setprecision(12);
     for (int k = 0; k < 4; ++k) {
       const double tx = (k % 2 == 1) ? -c.fx * b : 0.0;
-      os << "P" << k << ": " << c.fx << " 0 " << c.cx << " " << tx << " 0 " << c.fy << " "
-         << c.cy << " 0 0 0 1 0\n";
+      os << "P" << k << ": " << c.fx << " 0 " << c.cx << " " << tx << " 0 " << c.fy << " " << c.cy
+         << " 0 0 0 1 0\n";
     }
   });
 }
@@ -58,7 +57,8 @@ void WriteMarker(const std::string& path, const SyntheticSequence& seq) {
   const PinholeCamera& c = seq.camera();
   // FileStorage writes in memory; the file itself is written atomically.
   cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
-  fs << "format" << "dala-synthetic";
+  fs << "format"
+     << "dala-synthetic";
   fs << "version" << 1;
   fs << "preset" << o.preset;
   fs << "seed" << std::to_string(o.seed);
@@ -73,7 +73,8 @@ void WriteMarker(const std::string& path, const SyntheticSequence& seq) {
   fs << "blur_samples" << o.blur_samples;
   fs << "exposure_fraction" << o.exposure_fraction;
   fs << "brightness_change" << o.brightness_change;
-  fs << "world_frame" << "x east, y north, z up; camera x right, y down, z forward";
+  fs << "world_frame"
+     << "x east, y north, z up; camera x right, y down, z forward";
   const std::string text = fs.releaseAndGetString();
   WriteFileAtomically(path, [&](std::ostream& os) { os << text; });
 }
@@ -92,10 +93,10 @@ void WriteSyntheticDataset(const SimOptions& options, const std::string& dir,
   });
   WriteTrajectoryKitti(dir + "/poses.txt", seq.ground_truth());
   if (outputs.odometry) {
-    WriteTrajectoryTum(dir + "/odometry.txt",
-                       NoisyOdometry(seq.ground_truth(), options.seed, options.odometry_sigma_rot,
-                                     options.odometry_sigma_trans,
-                                     options.odometry_sigma_trans_fraction));
+    WriteTrajectoryTum(
+        dir + "/odometry.txt",
+        NoisyOdometry(seq.ground_truth(), options.seed, options.odometry_sigma_rot,
+                      options.odometry_sigma_trans, options.odometry_sigma_trans_fraction));
   }
   if (outputs.points) WritePointsPly(dir + "/points.ply", seq.scene().points_w);
   for (size_t i = 0; i < seq.size(); ++i) {

@@ -2,12 +2,11 @@
 
 #include <glog/logging.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Dense>
 
 namespace dala::sim {
 namespace {
@@ -48,8 +47,8 @@ void RenderScene(const Scene& scene, const PinholeCamera& camera, const Pose& T_
   const Eigen::Matrix3d R_c_w = T_c_w.linear();
   const Eigen::Vector3d t_c_w = T_c_w.translation();
   Eigen::Matrix3d K_inv;
-  K_inv << 1.0 / camera.fx, 0, -camera.cx / camera.fx, 0, 1.0 / camera.fy,
-      -camera.cy / camera.fy, 0, 0, 1;
+  K_inv << 1.0 / camera.fx, 0, -camera.cx / camera.fx, 0, 1.0 / camera.fy, -camera.cy / camera.fy,
+      0, 0, 1;
 
   // Pass 1: nearest patch per pixel.
   thread_local std::vector<double> inv_z;
@@ -130,8 +129,8 @@ void RenderScene(const Scene& scene, const PinholeCamera& camera, const Pose& T_
         const Eigen::Vector3d d_w = RK * Eigen::Vector3d(u, v, 1.0);
         const double sin_elev = d_w.z() / d_w.norm();
         const double a = std::clamp(sin_elev, 0.0, 1.0);
-        out[u] = static_cast<float>(scene.sky_horizon + (scene.sky_zenith - scene.sky_horizon) *
-                                                            std::sqrt(a));
+        out[u] = static_cast<float>(scene.sky_horizon +
+                                    (scene.sky_zenith - scene.sky_horizon) * std::sqrt(a));
         if (out_z) out_z[u] = 0.f;
         continue;
       }

@@ -4,10 +4,9 @@
 // The synthetic world: planar textured patches (parallelograms and triangles) in the world
 // frame w (x east, y north, z up; metres), and a sky.
 
+#include <Eigen/Core>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/sim/texture.h"
 

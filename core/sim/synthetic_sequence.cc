@@ -159,8 +159,7 @@ Trajectory NoisyOdometry(const Trajectory& ground_truth, uint64_t seed, double s
   Pose T_w_c = ground_truth.poses[0].T_w_c;
   odometry.Add(ground_truth.poses[0].t_ns, T_w_c);
   for (size_t i = 1; i < ground_truth.size(); ++i) {
-    const Pose T_prev_cur =
-        ground_truth.poses[i - 1].T_w_c.inverse() * ground_truth.poses[i].T_w_c;
+    const Pose T_prev_cur = ground_truth.poses[i - 1].T_w_c.inverse() * ground_truth.poses[i].T_w_c;
     const double st = sigma_trans + sigma_trans_fraction * T_prev_cur.translation().norm();
     Vector6d noise;
     for (int k = 0; k < 6; ++k) noise[k] = Gaussian(rng) * (k < 3 ? sigma_rot : st);

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "core/sim/random.h"
@@ -196,7 +195,8 @@ cv::Mat MakeTextureImage(uint64_t seed, TextureStyle style, int side) {
     img = SmoothBackground(rng, side, base, base - 25, base + 25, 12, 25.0);
     const int count = static_cast<int>(700 * s * s);
     for (int i = 0; i < count; ++i) {
-      const double g = rng.Uniform() < 0.5 ? base - rng.Uniform(25, 55) : base + rng.Uniform(25, 55);
+      const double g =
+          rng.Uniform() < 0.5 ? base - rng.Uniform(25, 55) : base + rng.Uniform(25, 55);
       DrawRandomShape(rng, img, 14 * s * rng.Uniform(0.6, 1.6), g, g + 1, true);
     }
     img = BlurWrap(img, 1.0);

@@ -4,9 +4,8 @@
 // Procedural grey-level textures for the synthetic world, and their anti-aliased sampling.
 
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace dala::sim {
 

@@ -25,11 +25,10 @@ Eigen::Matrix3d RotationBodyCamera() {
 // Camera pose from a position and yaw (about world z, 0 = looking east), pitch (positive =
 // looking down) and roll (about the viewing direction): R_w_c = Rz(yaw) Ry(pitch) Rx(roll) R_b_c.
 Pose CameraPose(const Eigen::Vector3d& p_w, double yaw, double pitch, double roll) {
-  const Eigen::Matrix3d R_w_b =
-      (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-       Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d R_w_b = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                                    .toRotationMatrix();
   return MakePose(R_w_b * RotationBodyCamera(), p_w);
 }
 
@@ -166,8 +165,8 @@ class SceneBuilder {
     s.gain = static_cast<float>(flat_light_ ? shade * (0.9 + 0.1 * albedo)
                                             : shade * albedo * Lighting(a.cross(b)));
     scene_->surfaces.push_back(s);
-    for (const Eigen::Vector3d& p : {o, Eigen::Vector3d(o + a), Eigen::Vector3d(o + a + b),
-                                     Eigen::Vector3d(o + b)}) {
+    for (const Eigen::Vector3d& p :
+         {o, Eigen::Vector3d(o + a), Eigen::Vector3d(o + a + b), Eigen::Vector3d(o + b)}) {
       scene_->points_w.push_back(p);
     }
   }
@@ -177,7 +176,8 @@ class SceneBuilder {
   void AddBox(SimRng& rng, const Eigen::Vector2d& c, double z0, double yaw, double length,
               double depth, double height) {
     const Eigen::Vector3d ex(std::cos(yaw), std::sin(yaw), 0), ey(-std::sin(yaw), std::cos(yaw), 0);
-    const Eigen::Vector3d base = Eigen::Vector3d(c.x(), c.y(), z0) - ex * length / 2 - ey * depth / 2;
+    const Eigen::Vector3d base =
+        Eigen::Vector3d(c.x(), c.y(), z0) - ex * length / 2 - ey * depth / 2;
     const Eigen::Vector3d up(0, 0, height);
     const Eigen::Vector3d L = ex * length, D = ey * depth;
     AddQuad(rng, base, L, up);
@@ -277,7 +277,8 @@ double DistanceToFootprint(const Eigen::Vector2d& q, const Eigen::Vector2d& c, d
 void LineStreet(SimRng& rng, SceneBuilder& builder, const std::vector<Eigen::Vector2d>& street,
                 const std::vector<Eigen::Vector2d>& clearance_samples, double ground_z) {
   std::vector<double> arc(street.size(), 0.0);
-  for (size_t i = 1; i < street.size(); ++i) arc[i] = arc[i - 1] + (street[i] - street[i - 1]).norm();
+  for (size_t i = 1; i < street.size(); ++i)
+    arc[i] = arc[i - 1] + (street[i] - street[i - 1]).norm();
   auto at = [&](double s, Eigen::Vector2d* p, Eigen::Vector2d* tangent) {
     const size_t i = std::min<size_t>(
         street.size() - 2, std::upper_bound(arc.begin(), arc.end(), s) - arc.begin() - 1);
@@ -351,8 +352,9 @@ void BuildCity(Scene* scene, uint64_t seed, bool weak) {
   LineStreet(rng, builder, loop, loop, 0.0);
   AddSkyline(rng, builder, Eigen::Vector2d::Zero(), 95, 140, 36);
   // The ground is seen close up: a finer texture than the walls.
-  SceneBuilder(scene, 80.0, weak).AddGround(-160, 160, -150, 150, 10.0,
-                    [&](int ix, int iy) { return SimRng(MixSeed(seed, 2 + ix * 1000 + iy)); });
+  SceneBuilder(scene, 80.0, weak).AddGround(-160, 160, -150, 150, 10.0, [&](int ix, int iy) {
+    return SimRng(MixSeed(seed, 2 + ix * 1000 + iy));
+  });
 }
 
 void BuildCorridor(Scene* scene, uint64_t seed) {
@@ -368,8 +370,8 @@ void BuildCorridor(Scene* scene, uint64_t seed) {
     uint64_t stream;
     double shift;
   };
-  const Segment segments[] = {{-30, 40, 10, 0},   {40, 85, 11, 0},   {85, 140, 12, 0},
-                              {40, 85, 11, 100}, {185, 260, 14, 0}};
+  const Segment segments[] = {
+      {-30, 40, 10, 0}, {40, 85, 11, 0}, {85, 140, 12, 0}, {40, 85, 11, 100}, {185, 260, 14, 0}};
   for (const Segment& seg : segments) {
     Scene part;
     SceneBuilder part_builder(&part, 60.0);
@@ -382,8 +384,8 @@ void BuildCorridor(Scene* scene, uint64_t seed) {
     // Skyline blocks behind the street fronts.
     for (double x = seg.x0; x < seg.x1; x += rng.Uniform(12, 20)) {
       for (int side : {1, -1}) {
-        part_builder.AddBox(rng, {x + 6, side * rng.Uniform(28, 40)}, 0.0, 0.0,
-                            rng.Uniform(10, 16), rng.Uniform(8, 14), rng.Uniform(14, 30));
+        part_builder.AddBox(rng, {x + 6, side * rng.Uniform(28, 40)}, 0.0, 0.0, rng.Uniform(10, 16),
+                            rng.Uniform(8, 14), rng.Uniform(14, 30));
       }
     }
     SceneBuilder(&part, 80.0).AddGround(seg.x0, seg.x1, -60, 60, 5.0, [&](int ix, int iy) {
