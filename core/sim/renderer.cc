@@ -37,6 +37,34 @@ int ClipNear(const Eigen::Vector3d* in, int n, Eigen::Vector3d* out) {
   return m;
 }
 
+// log2(x) for x >= 1 to ~0.09 accuracy: exponent plus the mantissa's linear part; enough for
+// choosing a mip level (continuous and monotonic), and much cheaper than std::log2.
+inline float FastLog2(float x) {
+  int exponent;
+  const float mantissa = std::frexp(x, &exponent);  // x = m 2^e, m in [0.5, 1).
+  return static_cast<float>(exponent - 1) + 2.f * (mantissa - 0.5f);
+}
+
+// exp(-x) for x >= 0 from a table with linear interpolation (haze is a smooth fade; a 1e-4
+// error is invisible after rounding to 8 bits).
+class ExpTable {
+ public:
+  ExpTable() {
+    for (int i = 0; i <= kSize; ++i) table_[i] = std::exp(-static_cast<float>(i) / kPerUnit);
+  }
+  float operator()(float x) const {
+    const float f = x * kPerUnit;
+    if (f >= kSize) return 0.f;
+    const int i = static_cast<int>(f);
+    return table_[i] + (f - static_cast<float>(i)) * (table_[i + 1] - table_[i]);
+  }
+
+ private:
+  static constexpr int kSize = 4096;
+  static constexpr float kPerUnit = 256.f;  // Covers x in [0, 16).
+  float table_[kSize + 1];
+};
+
 }  // namespace
 
 void RenderScene(const Scene& scene, const PinholeCamera& camera, const Pose& T_w_c,
@@ -118,6 +146,8 @@ void RenderScene(const Scene& scene, const PinholeCamera& camera, const Pose& T_
   const Eigen::Matrix3d R_w_c = T_w_c.linear();
   // Sky: brightness from the elevation of the ray d_w = R_w_c K^-1 p.
   const Eigen::Matrix3d RK = R_w_c * K_inv;
+  static const ExpTable exp_table;
+  const double inv_haze = 1.0 / scene.haze_distance;
   for (int v = 0; v < H; ++v) {
     float* out = radiance->ptr<float>(v);
     float* out_z = depth != nullptr ? depth->ptr<float>(v) : nullptr;
@@ -147,10 +177,10 @@ void RenderScene(const Scene& scene, const PinholeCamera& camera, const Pose& T_
       const Eigen::Vector2d duv_du = surf.uv_a * ds_du + surf.uv_b * dt_du;
       const Eigen::Vector2d duv_dv = surf.uv_a * ds_dv + surf.uv_b * dt_dv;
       const double rho2 = std::max(duv_du.squaredNorm(), duv_dv.squaredNorm());
-      const float lod = rho2 > 1.0 ? static_cast<float>(0.5 * std::log2(rho2)) : 0.f;
+      const float lod = rho2 > 1.0 ? 0.5f * FastLog2(static_cast<float>(rho2)) : 0.f;
       const Eigen::Vector2d uv = surf.uv_o + s * surf.uv_a + t * surf.uv_b;
       const float texel = scene.textures[surf.texture]->Sample(uv.x(), uv.y(), lod);
-      const float haze = static_cast<float>(std::exp(-inv / scene.haze_distance));
+      const float haze = exp_table(static_cast<float>(inv * inv_haze));
       out[u] = haze * surf.gain * texel + (1.f - haze) * scene.sky_horizon;
       if (out_z) out_z[u] = static_cast<float>(inv);
     }

@@ -144,9 +144,12 @@ float Texture::SampleLevel(int l, double x, double y) const {
   const int mask = n - 1;
   const double scale = 1.0 / static_cast<double>(1 << l);
   const double xl = x * scale, yl = y * scale;
-  const double fx0 = std::floor(xl), fy0 = std::floor(yl);
-  const float ax = static_cast<float>(xl - fx0), ay = static_cast<float>(yl - fy0);
-  const int64_t ix = static_cast<int64_t>(fx0), iy = static_cast<int64_t>(fy0);
+  // floor() by truncation toward zero, corrected for negative non-integers.
+  int64_t ix = static_cast<int64_t>(xl), iy = static_cast<int64_t>(yl);
+  ix -= static_cast<double>(ix) > xl;
+  iy -= static_cast<double>(iy) > yl;
+  const float ax = static_cast<float>(xl - static_cast<double>(ix));
+  const float ay = static_cast<float>(yl - static_cast<double>(iy));
   const int x0 = static_cast<int>(ix & mask), x1 = static_cast<int>((ix + 1) & mask);
   const int y0 = static_cast<int>(iy & mask), y1 = static_cast<int>((iy + 1) & mask);
   const float* r0 = m.ptr<float>(y0);
