@@ -1,0 +1,172 @@
+#include "core/sim/synthetic_sequence.h"
+
+#include <glog/logging.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/sim/random.h"
+
+namespace dala::sim {
+namespace {
+
+// N(0, 1) by Box-Muller on SimRng (platform-independent).
+double Gaussian(SimRng& rng) {
+  const double u1 = 1.0 - rng.Uniform();  // (0, 1]
+  const double u2 = rng.Uniform();
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * M_PI * u2);
+}
+
+}  // namespace
+
+bool SimOptions::IsValid(std::string* why) const {
+  std::ostringstream os;
+  if (FindPreset(preset) == nullptr) {
+    os << "unknown preset '" << preset << "'; use one of:";
+    for (const auto& p : Presets()) os << " " << p.name;
+  } else if (frames < 0) {
+    os << "frames must be >= 0 (0 = the preset's default), got " << frames;
+  } else if (width < 16 || height < 16 || width > 8192 || height > 8192) {
+    os << "image size must be within 16..8192 pixels, got " << width << "x" << height;
+  } else if (!(fx > 0) || !(fy > 0)) {
+    os << "fx and fy must be > 0, got " << fx << ", " << fy;
+  } else if (!(fps > 0) || fps > 10000) {
+    os << "fps must be in (0, 10000], got " << fps;
+  } else if (stereo && !(baseline > 0)) {
+    os << "baseline must be > 0 for stereo, got " << baseline;
+  } else if (!(noise_sigma >= 0)) {
+    os << "noise sigma must be >= 0, got " << noise_sigma;
+  } else if (motion_blur && (blur_samples < 2 || blur_samples > 64)) {
+    os << "blur_samples must be in 2..64, got " << blur_samples;
+  } else if (motion_blur && !(exposure_fraction > 0 && exposure_fraction <= 1)) {
+    os << "exposure_fraction must be in (0, 1], got " << exposure_fraction;
+  } else if (!(brightness_change >= 0 && brightness_change < 1)) {
+    os << "brightness_change must be in [0, 1), got " << brightness_change;
+  } else if (!(odometry_sigma_rot >= 0 && odometry_sigma_trans >= 0 &&
+               odometry_sigma_trans_fraction >= 0)) {
+    os << "odometry sigmas must be >= 0";
+  } else if (texture_size < 64 || texture_size > 4096 || (texture_size & (texture_size - 1))) {
+    os << "texture_size must be a power of two in 64..4096, got " << texture_size;
+  } else {
+    return true;
+  }
+  if (why != nullptr) *why = os.str();
+  return false;
+}
+
+std::vector<std::string> PresetNames() {
+  std::vector<std::string> names;
+  for (const auto& p : Presets()) names.push_back(p.name);
+  return names;
+}
+
+SyntheticSequence::SyntheticSequence(const SimOptions& options) : options_(options) {
+  std::string why;
+  if (!options_.IsValid(&why)) throw Error() << "synthetic sequence options: " << why;
+  const PresetInfo* info = FindPreset(options_.preset);
+  frames_ = options_.frames > 0
+                ? options_.frames
+                : std::max(1, static_cast<int>(std::lround(info->duration_s * options_.fps)));
+  camera_.width = options_.width;
+  camera_.height = options_.height;
+  camera_.fx = options_.fx;
+  camera_.fy = options_.fy;
+  camera_.cx = options_.cx_or_centre();
+  camera_.cy = options_.cy_or_centre();
+  world_ = BuildWorld(options_.preset, options_.seed, options_.texture_size);
+  for (int i = 0; i < frames_; ++i) ground_truth_.Add(t_ns(i), T_w_c0(i));
+}
+
+Eigen::Matrix3d SyntheticSequence::K() const {
+  Eigen::Matrix3d K;
+  K << camera_.fx, 0, camera_.cx, 0, camera_.fy, camera_.cy, 0, 0, 1;
+  return K;
+}
+
+Pose SyntheticSequence::T_c0_c1() const {
+  Pose T = Pose::Identity();
+  T.translation() = Eigen::Vector3d(options_.baseline, 0, 0);
+  return T;
+}
+
+int64_t SyntheticSequence::t_ns(size_t i) const {
+  return std::llround(static_cast<double>(i) * 1e9 / options_.fps);
+}
+
+Pose SyntheticSequence::T_w_c0(size_t i) const {
+  return world_.path->T_w_c(static_cast<double>(i) / options_.fps);
+}
+
+cv::Mat SyntheticSequence::RenderView(const Pose& T_w_c, cv::Mat* depth) const {
+  cv::Mat radiance, image;
+  RenderScene(world_.scene, camera_, T_w_c, &radiance, depth);
+  radiance.convertTo(image, CV_8UC1);  // Rounds and saturates.
+  return image;
+}
+
+cv::Mat SyntheticSequence::RenderCamera(size_t i, int cam) const {
+  const double t = static_cast<double>(i) / options_.fps;
+  const Pose T_c0_c = cam == 0 ? Pose::Identity() : T_c0_c1();
+  cv::Mat radiance;
+  if (options_.motion_blur) {
+    const int n = options_.blur_samples;
+    const double exposure = options_.exposure_fraction / options_.fps;
+    cv::Mat sum = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1), sample;
+    for (int k = 0; k < n; ++k) {
+      const double tk = t + exposure * (static_cast<double>(k) / (n - 1) - 0.5);
+      RenderScene(world_.scene, camera_, world_.path->T_w_c(tk) * T_c0_c, &sample);
+      sum += sample;
+    }
+    radiance = sum * (1.0 / n);
+  } else {
+    RenderScene(world_.scene, camera_, world_.path->T_w_c(t) * T_c0_c, &radiance);
+  }
+  if (options_.brightness_change > 0) {
+    SimRng phase_rng(MixSeed(options_.seed, 77));
+    const double phase = phase_rng.Uniform(0, 2 * M_PI);
+    const double wave = std::sin(2 * M_PI * t / 6.3 + phase);
+    const double gain = 1.0 + options_.brightness_change * wave * (cam == 0 ? 1.0 : 1.02);
+    radiance *= gain;
+  }
+  if (options_.noise_sigma > 0) {
+    cv::Mat noise(radiance.size(), CV_32FC1);
+    cv::RNG rng(MixSeed(options_.seed, 1000 + i, cam));
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, options_.noise_sigma);
+    radiance += noise;
+  }
+  cv::Mat image;
+  radiance.convertTo(image, CV_8UC1);
+  return image;
+}
+
+Frame SyntheticSequence::Render(size_t i) const {
+  CHECK_LT(i, size()) << "frame index out of range";
+  Frame frame;
+  frame.id = FrameId(static_cast<int64_t>(i));
+  frame.t_ns = t_ns(i);
+  frame.T_w_c0_gt = T_w_c0(i);
+  frame.left = RenderCamera(i, 0);
+  if (options_.stereo) frame.right = RenderCamera(i, 1);
+  return frame;
+}
+
+Trajectory NoisyOdometry(const Trajectory& ground_truth, uint64_t seed, double sigma_rot,
+                         double sigma_trans, double sigma_trans_fraction) {
+  Trajectory odometry;
+  if (ground_truth.empty()) return odometry;
+  SimRng rng(MixSeed(seed, 555));
+  Pose T_w_c = ground_truth.poses[0].T_w_c;
+  odometry.Add(ground_truth.poses[0].t_ns, T_w_c);
+  for (size_t i = 1; i < ground_truth.size(); ++i) {
+    const Pose T_prev_cur = ground_truth.poses[i - 1].T_w_c.inverse() * ground_truth.poses[i].T_w_c;
+    const double st = sigma_trans + sigma_trans_fraction * T_prev_cur.translation().norm();
+    Vector6d noise;
+    for (int k = 0; k < 6; ++k) noise[k] = Gaussian(rng) * (k < 3 ? sigma_rot : st);
+    T_w_c = Orthonormalized(T_w_c * T_prev_cur * ExpSE3(noise));
+    odometry.Add(ground_truth.poses[i].t_ns, T_w_c);
+  }
+  return odometry;
+}
+
+}  // namespace dala::sim

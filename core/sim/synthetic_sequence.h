@@ -1,0 +1,127 @@
+#ifndef DALA_CORE_SIM_SYNTHETIC_SEQUENCE_H_
+#define DALA_CORE_SIM_SYNTHETIC_SEQUENCE_H_
+
+// A rendered synthetic sequence with exact ground truth: the project's test world.
+//
+//   dala::sim::SimOptions options;            // rover_loop, stereo, 752x480, fx = 450
+//   options.frames = 50;
+//   dala::sim::SyntheticSequence seq(options);
+//   dala::Frame f = seq.Render(7);            // f.left, f.right, *f.T_w_c0_gt, f.t_ns
+//   cv::Mat depth;
+//   cv::Mat img = seq.RenderView(seq.T_w_c0(7), &depth);  // clean view + z depth (metres)
+//
+// World frame: x east, y north, z up (see core/sim/world.h). Camera: x right, y down, z
+// forward; the right camera c1 sits at x = +baseline in c0 (T_c0_c1 = translation (b, 0, 0)),
+// rectified, same intrinsics. Everything is deterministic from `seed`: the same options give
+// bit-identical images. Render() and RenderView() are const and thread-safe.
+
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "core/geometry.h"
+#include "core/sim/renderer.h"
+#include "core/sim/world.h"
+#include "core/trajectory.h"
+#include "core/types.h"
+
+namespace dala::sim {
+
+struct SimOptions {
+  // One of PresetNames(): rover_loop, flight, rotation, fast, low_texture, false_loop.
+  std::string preset = "rover_loop";
+  // Number of frames; 0 = the preset's default duration times fps.
+  int frames = 0;
+  // Seed of everything random: scene layout, textures, image noise, odometry noise.
+  uint64_t seed = 1;
+  // Image size and pinhole intrinsics (pixels); cx, cy < 0 mean the image centre.
+  int width = 752;
+  int height = 480;
+  double fx = 450.0;
+  double fy = 450.0;
+  double cx = -1.0;
+  double cy = -1.0;
+  // Stereo baseline (m); the right camera is at +baseline along the left camera's x axis.
+  double baseline = 0.4;
+  // Frame rate (Hz): frame i is at t = i / fps.
+  double fps = 10.0;
+  // Render the right image too.
+  bool stereo = true;
+  // Standard deviation of the additive Gaussian image noise (grey levels, 0 = none).
+  double noise_sigma = 1.0;
+  // Motion blur: average of `blur_samples` renders over an exposure of `exposure_fraction` of
+  // the frame interval, centred on the frame time (the ground-truth pose).
+  bool motion_blur = false;
+  int blur_samples = 5;
+  double exposure_fraction = 0.5;
+  // Global brightness change: image gain 1 + brightness_change * sin(2 pi t / 6.3 s + phase),
+  // phase from the seed; the right camera's gain differs by a further +2% of it. 0 = constant.
+  double brightness_change = 0.0;
+  // Noisy odometry (see NoisyOdometry): per-step noise, rotation sigma (rad) and translation
+  // sigma (m) plus a fraction of the step's length.
+  double odometry_sigma_rot = 0.002;
+  double odometry_sigma_trans = 0.005;
+  double odometry_sigma_trans_fraction = 0.02;
+  // Side of the procedural textures (power of two); smaller builds faster, looks coarser.
+  int texture_size = 1024;
+
+  bool IsValid(std::string* why) const;
+  // Effective principal point.
+  double cx_or_centre() const { return cx >= 0 ? cx : (width - 1) / 2.0; }
+  double cy_or_centre() const { return cy >= 0 ? cy : (height - 1) / 2.0; }
+};
+
+// Names of the presets, in a fixed order.
+std::vector<std::string> PresetNames();
+
+class SyntheticSequence {
+ public:
+  // Throws dala::Error naming the option when options.IsValid() is false.
+  explicit SyntheticSequence(const SimOptions& options);
+
+  const SimOptions& options() const { return options_; }
+  size_t size() const { return static_cast<size_t>(frames_); }
+  const PinholeCamera& camera() const { return camera_; }
+  // The 3x3 intrinsic matrix K (same for both cameras).
+  Eigen::Matrix3d K() const;
+  // T_c0_c1: the right camera in the left camera frame.
+  Pose T_c0_c1() const;
+
+  // Frame i: images (with noise, blur, brightness as configured), time and ground truth.
+  Frame Render(size_t i) const;
+  Pose T_w_c0(size_t i) const;
+  int64_t t_ns(size_t i) const;
+  // Left-camera pose at any time t (closed form), for tests that need a continuous path.
+  Pose T_w_c0_at(double t_s) const { return world_.path->T_w_c(t_s); }
+  const Trajectory& ground_truth() const { return ground_truth_; }
+  double PathLength() const { return ground_truth_.PathLength(); }
+
+  // Renders a clean view (no noise, blur or brightness change) from any camera pose T_w_c with
+  // the sequence's intrinsics; CV_8UC1. depth (optional): CV_32FC1 z in the camera frame
+  // (metres) of the surface seen at each pixel, 0 where the pixel sees the sky.
+  cv::Mat RenderView(const Pose& T_w_c, cv::Mat* depth = nullptr) const;
+
+  // The scene (patches, textures, true 3D points).
+  const Scene& scene() const { return world_.scene; }
+
+ private:
+  cv::Mat RenderCamera(size_t i, int cam) const;
+
+  SimOptions options_;
+  int frames_ = 0;
+  PinholeCamera camera_;
+  World world_;
+  Trajectory ground_truth_;
+};
+
+// Integrated noisy odometry: the relative poses T_{i-1,i} of `ground_truth` each perturbed on
+// the right by Exp([n_rot; n_trans]), n_rot ~ N(0, sigma_rot^2 I), n_trans ~ N(0, (sigma_trans
+// + fraction * |step|)^2 I), then chained from the first true pose. Deterministic from seed.
+Trajectory NoisyOdometry(const Trajectory& ground_truth, uint64_t seed, double sigma_rot,
+                         double sigma_trans, double sigma_trans_fraction);
+
+}  // namespace dala::sim
+
+#endif  // DALA_CORE_SIM_SYNTHETIC_SEQUENCE_H_
