@@ -1,0 +1,299 @@
+#include "frontend/frontend.h"
+
+#include <glog/logging.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <thread>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace dala {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// Distance in pixels of the current point from the epipolar line of the previous one, for the
+// motion T_cur_prev = (R, t): E = [t]x R, line l = E x_prev in normalised coordinates.
+double EpipolarDistancePx(const PinholeCamera& cam, const Pose& T_cur_prev,
+                          const Eigen::Vector2d& uv_prev, const Eigen::Vector2d& uv_cur) {
+  const Eigen::Vector3d t = T_cur_prev.translation();
+  if (t.norm() < 1e-9) {
+    // Pure rotation: the point must land where the rotation sends it.
+    Eigen::Vector2d uv;
+    if (!cam.Project(T_cur_prev.linear() * cam.Unproject(uv_prev), &uv)) {
+      return std::numeric_limits<double>::infinity();
+    }
+    return (uv - uv_cur).norm();
+  }
+  const Eigen::Matrix3d E = Skew(t.normalized()) * T_cur_prev.linear();
+  const Eigen::Vector3d l = E * cam.Unproject(uv_prev);
+  const double n = l.head<2>().norm();
+  if (n < 1e-12) return std::numeric_limits<double>::infinity();
+  return std::abs(cam.Unproject(uv_cur).dot(l)) / n * cam.fx;
+}
+
+}  // namespace
+
+bool FrontendOptions::IsValid(std::string* why) const {
+  if (!harris.IsValid(why) || !stereo.IsValid(why) || !tracking_matcher.IsValid(why) ||
+      !motion.IsValid(why) || !keyframe.IsValid(why)) {
+    return false;
+  }
+  const auto fail = [&](const char* msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (tracking_radius_px <= 0) return fail("frontend.tracking_radius_px must be > 0");
+  if (epipolar_gate_px <= 0) return fail("frontend.epipolar_gate_px must be > 0");
+  if (keyframe_gate_px <= 0) return fail("frontend.keyframe_gate_px must be > 0");
+  return true;
+}
+
+Frontend::Frontend(const StereoRig& rig, const FrontendOptions& options)
+    : rig_(rig),
+      options_(options),
+      motion_estimator_(rig, options.motion),
+      keyframe_policy_(options.keyframe) {
+  std::string why;
+  CHECK(options_.IsValid(&why)) << why;
+  CHECK(rig_.left.IsValid(&why)) << why;
+}
+
+std::vector<Match> Frontend::MatchTemporal(const TrackedFrame& from, const DetectedImage& cur,
+                                           const Pose* T_from_cur) const {
+  if (T_from_cur == nullptr) {
+    MatcherOptions unconstrained = options_.tracking_matcher;
+    unconstrained.max_rotation = 3.2;
+    return MatchPoints(from.detection, cur, unconstrained);
+  }
+  const Pose T_cur_from = T_from_cur->inverse();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<Eigen::Vector2d> predicted(from.detection.points.size(), Eigen::Vector2d(nan, nan));
+  for (size_t i = 0; i < predicted.size(); ++i) {
+    Eigen::Vector3d p_cur;
+    if (from.stereo[i]) {
+      p_cur = T_cur_from * from.stereo[i]->p_c0;
+    } else {
+      // No depth: a point at infinity moves with the rotation only.
+      p_cur = T_cur_from.linear() * rig_.left.Unproject(from.detection.points[i].uv);
+    }
+    Eigen::Vector2d uv;
+    if (rig_.left.Project(p_cur, &uv)) predicted[i] = uv;
+  }
+  const MatchPrior prior = MatchPrior::Predicted(std::move(predicted), options_.tracking_radius_px);
+  return MatchPoints(from.detection, cur, options_.tracking_matcher, &prior);
+}
+
+std::optional<MotionEstimate> Frontend::TrackFromPrevious(TrackedFrame* cur) {
+  const TrackedFrame& prev = *prev_;
+  const Pose prediction = velocity_T_prev_cur_;
+  std::optional<MotionResult> motion;
+  std::vector<Match> matches;
+  std::vector<int> corr_match;  // Correspondence -> index in matches.
+  for (int attempt = 0; attempt < 2 && !motion; ++attempt) {
+    matches = MatchTemporal(prev, cur->detection, attempt == 0 ? &prediction : nullptr);
+    corr_match.clear();
+    if (rig_.is_stereo()) {
+      std::vector<MotionCorrespondence> corrs;
+      for (size_t k = 0; k < matches.size(); ++k) {
+        const Match& m = matches[k];
+        if (!prev.stereo[m.i]) continue;
+        MotionCorrespondence c;
+        c.p_prev = prev.stereo[m.i]->p_c0;
+        c.cov_p_prev = prev.stereo[m.i]->cov_p_c0;
+        c.uv_cur = cur->detection.points[m.j].uv;
+        if (cur->stereo[m.j]) c.u_right_cur = cur->stereo[m.j]->u_right;
+        corrs.push_back(c);
+        corr_match.push_back(static_cast<int>(k));
+      }
+      motion = motion_estimator_.Estimate3D2D(corrs, &prediction);
+    } else {
+      std::vector<Eigen::Vector2d> uv_prev, uv_cur;
+      for (size_t k = 0; k < matches.size(); ++k) {
+        uv_prev.push_back(prev.detection.points[matches[k].i].uv);
+        uv_cur.push_back(cur->detection.points[matches[k].j].uv);
+        corr_match.push_back(static_cast<int>(k));
+      }
+      motion = motion_estimator_.EstimateEssential(uv_prev, uv_cur);
+    }
+  }
+  if (!motion) return std::nullopt;
+
+  // Ids through the motion's inliers, then the depth-less matches through the epipolar gate.
+  std::vector<bool> decided(matches.size(), false);
+  for (size_t c = 0; c < corr_match.size(); ++c) {
+    const Match& m = matches[corr_match[c]];
+    decided[corr_match[c]] = true;
+    if (!motion->inlier[c]) continue;
+    cur->landmark[m.j] = prev.landmark[m.i];
+    cur->track_length[m.j] = prev.track_length[m.i] + 1;
+  }
+  const Pose T_cur_prev = motion->estimate.T_prev_cur.inverse();
+  for (size_t k = 0; k < matches.size(); ++k) {
+    if (decided[k]) continue;
+    const Match& m = matches[k];
+    if (EpipolarDistancePx(rig_.left, T_cur_prev, prev.detection.points[m.i].uv,
+                           cur->detection.points[m.j].uv) < options_.epipolar_gate_px) {
+      cur->landmark[m.j] = prev.landmark[m.i];
+      cur->track_length[m.j] = prev.track_length[m.i] + 1;
+    }
+  }
+  return motion->estimate;
+}
+
+void Frontend::ReacquireFromKeyframe(TrackedFrame* cur) const {
+  const TrackedFrame& kf = *keyframe_;
+  std::unordered_set<LandmarkId> present;
+  for (const LandmarkId& id : cur->landmark) {
+    if (id.valid()) present.insert(id);
+  }
+  const Pose T_kf_cur = kf.T_w_c.inverse() * cur->T_w_c;
+  const Pose T_cur_kf = T_kf_cur.inverse();
+  const std::vector<Match> matches = MatchTemporal(kf, cur->detection, &T_kf_cur);
+  for (const Match& m : matches) {
+    if (cur->landmark[m.j].valid() || !kf.landmark[m.i].valid() ||
+        present.count(kf.landmark[m.i])) {
+      continue;
+    }
+    const Eigen::Vector2d& uv_cur = cur->detection.points[m.j].uv;
+    double error = std::numeric_limits<double>::infinity();
+    if (kf.stereo[m.i]) {
+      Eigen::Vector2d uv;
+      if (rig_.left.Project(T_cur_kf * kf.stereo[m.i]->p_c0, &uv)) error = (uv - uv_cur).norm();
+    } else {
+      error = EpipolarDistancePx(rig_.left, T_cur_kf, kf.detection.points[m.i].uv, uv_cur);
+    }
+    if (error > options_.keyframe_gate_px) continue;
+    cur->landmark[m.j] = kf.landmark[m.i];
+    cur->track_length[m.j] = kf.track_length[m.i] + 1;
+    present.insert(kf.landmark[m.i]);
+  }
+}
+
+FrameMeasurement Frontend::Process(const Frame& frame) {
+  CHECK_EQ(frame.left.type(), CV_8UC1) << "Frontend::Process expects 8-bit grey images";
+  CHECK(frame.left.cols == rig_.left.width && frame.left.rows == rig_.left.height)
+      << "image size " << frame.left.cols << "x" << frame.left.rows << " differs from the rig's "
+      << rig_.left.width << "x" << rig_.left.height;
+  const bool stereo = rig_.is_stereo() && !frame.right.empty();
+  const auto t_start = Clock::now();
+  FrameMeasurement out;
+  out.frame = frame.id;
+  out.t_ns = frame.t_ns;
+  out.stereo = stereo;
+
+  // 1. Interest points, both images at once.
+  TrackedFrame cur;
+  cur.id = frame.id;
+  DetectedImage right;
+  if (stereo && options_.parallel_detection) {
+    std::thread right_thread([&] { right = DetectHarris(frame.right, options_.harris); });
+    cur.detection = DetectHarris(frame.left, options_.harris);
+    right_thread.join();
+  } else {
+    cur.detection = DetectHarris(frame.left, options_.harris);
+    if (stereo) right = DetectHarris(frame.right, options_.harris);
+  }
+  const size_t n = cur.detection.points.size();
+  cur.landmark.assign(n, LandmarkId());
+  cur.track_length.assign(n, 1);
+  out.timings.detect_ms = MsSince(t_start);
+
+  // 2. Stereo.
+  auto t0 = Clock::now();
+  cur.stereo.assign(n, std::nullopt);
+  if (stereo) {
+    cur.stereo = MatchStereo(rig_, cur.detection, right, frame.left, frame.right, options_.stereo);
+  }
+  out.timings.stereo_ms = MsSince(t0);
+
+  // 3. Tracking and motion.
+  t0 = Clock::now();
+  std::optional<MotionEstimate> motion;
+  if (prev_) {
+    motion = TrackFromPrevious(&cur);
+    if (motion) {
+      velocity_T_prev_cur_ = motion->T_prev_cur;
+      if (!motion->scale_known) {
+        // Monocular: keep the direction, with the previous step's length (unknown scale).
+        const double step = std::max(velocity_T_prev_cur_.translation().norm(), 1e-3);
+        velocity_T_prev_cur_.translation() = motion->T_prev_cur.translation() * step;
+      }
+    }
+    // Lost: assume the last velocity for this frame (the gap is flagged by the status).
+    cur.T_w_c = Orthonormalized(prev_->T_w_c * velocity_T_prev_cur_);
+    out.status = motion ? TrackingStatus::kTracking : TrackingStatus::kLost;
+  } else {
+    out.status = TrackingStatus::kInitializing;
+  }
+  out.timings.motion_ms = MsSince(t0);
+  t0 = Clock::now();
+  if (options_.match_keyframe && motion && keyframe_ && keyframe_->id != prev_->id) {
+    ReacquireFromKeyframe(&cur);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (!cur.landmark[i].valid()) cur.landmark[i] = LandmarkId(next_landmark_++);
+  }
+  out.timings.track_ms = MsSince(t0);
+  T_w_cur_ = cur.T_w_c;
+  out.motion = motion;
+
+  // 4. Keyframe decision against the last keyframe.
+  ++frames_since_keyframe_;
+  if (!keyframe_ || out.status != TrackingStatus::kTracking) {
+    out.is_keyframe = true;
+  } else {
+    std::unordered_map<LandmarkId, Eigen::Vector2d> kf_uv;
+    for (size_t i = 0; i < keyframe_->landmark.size(); ++i) {
+      kf_uv[keyframe_->landmark[i]] = keyframe_->detection.points[i].uv;
+    }
+    std::vector<double> parallax;
+    for (size_t i = 0; i < n; ++i) {
+      const auto it = kf_uv.find(cur.landmark[i]);
+      if (it != kf_uv.end()) parallax.push_back((cur.detection.points[i].uv - it->second).norm());
+    }
+    KeyframeEvidence evidence;
+    evidence.frames_since_keyframe = frames_since_keyframe_;
+    evidence.tracked_fraction =
+        kf_uv.empty() ? 0.0 : static_cast<double>(parallax.size()) / kf_uv.size();
+    if (!parallax.empty()) {
+      std::nth_element(parallax.begin(), parallax.begin() + parallax.size() / 2, parallax.end());
+      evidence.median_parallax_px = parallax[parallax.size() / 2];
+    }
+    evidence.T_kf_cur = keyframe_->T_w_c.inverse() * cur.T_w_c;
+    out.tracked_fraction = evidence.tracked_fraction;
+    out.is_keyframe = keyframe_policy_.IsKeyframe(evidence);
+  }
+
+  // 5. The measurement.
+  out.observations.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    FeatureObservation o;
+    o.landmark = cur.landmark[i];
+    o.uv = cur.detection.points[i].uv;
+    o.sigma_px = options_.stereo.sigma_px;
+    o.track_length = cur.track_length[i];
+    if (cur.stereo[i]) {
+      o.u_right = cur.stereo[i]->u_right;
+      o.p_c0 = cur.stereo[i]->p_c0;
+      o.cov_p_c0 = cur.stereo[i]->cov_p_c0;
+    }
+    out.observations.push_back(o);
+  }
+  if (out.is_keyframe) {
+    keyframe_ = cur;
+    frames_since_keyframe_ = 0;
+  }
+  prev_ = std::move(cur);
+  out.timings.total_ms = MsSince(t_start);
+  return out;
+}
+
+}  // namespace dala

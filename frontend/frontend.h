@@ -1,0 +1,110 @@
+#ifndef DALA_FRONTEND_FRONTEND_H_
+#define DALA_FRONTEND_FRONTEND_H_
+
+// The visual frontend: for each frame, interest points, stereo, tracking (to the previous frame
+// and to the last keyframe), visual motion and the keyframe decision, packed into the
+// FrameMeasurement that every estimator consumes (core/frame_measurement.h). It knows no
+// estimator.
+//
+// Tracking: the previous frame's points are predicted in the current image with a constant-
+// velocity motion (points with depth are reprojected, points without depth are rotated), the
+// matcher searches around the predictions, and the motion estimator keeps the inliers. If that
+// fails (a jerk), matching is retried without a prior, as for a loop closure. A current point
+// inherits the landmark id of its previous-frame match when that match is an inlier of the
+// motion (or, without depth, when it lies within `epipolar_gate_px` of its epipolar line);
+// points without an inherited id are matched to the last keyframe (re-acquiring landmarks
+// lost for a few frames), and the rest start new landmarks.
+//
+// Usage:
+//   dala::Frontend frontend(dataset->rig(), dala::FrontendOptions());
+//   dala::Frame frame;
+//   while (dataset->Next(&frame)) {
+//     const dala::FrameMeasurement m = frontend.Process(frame);
+//     estimator.Add(m);
+//   }
+// Not thread safe (one frontend per sequence); the same frames and options give the same output.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/frame_measurement.h"
+#include "core/types.h"
+#include "frontend/harris.h"
+#include "frontend/keyframe_policy.h"
+#include "frontend/matcher.h"
+#include "frontend/motion_estimator.h"
+#include "frontend/stereo.h"
+
+namespace dala {
+
+struct FrontendOptions {
+  HarrisOptions harris;
+  StereoOptions stereo;
+  MatcherOptions tracking_matcher = MatcherOptions::ForTracking();
+  MotionEstimatorOptions motion;
+  KeyframePolicyOptions keyframe;
+  // Search radius around the constant-velocity prediction, pixels.
+  double tracking_radius_px = 30.0;
+  // Matches of points without depth must lie this close to their epipolar line (pixels).
+  double epipolar_gate_px = 2.0;
+  // Match the current frame to the last keyframe to re-acquire lost landmarks.
+  bool match_keyframe = true;
+  // Reprojection gate for keyframe re-acquisitions (pixels).
+  double keyframe_gate_px = 3.0;
+  // Detect the right image in a second thread (does not change the result).
+  bool parallel_detection = true;
+
+  bool IsValid(std::string* why) const;
+};
+
+class Frontend {
+ public:
+  Frontend(const StereoRig& rig, const FrontendOptions& options);
+
+  // Processes the next frame (frames in time order). Images must be CV_8UC1 and of the rig's
+  // size (CHECK: the dataset readers validate at the I/O boundary).
+  FrameMeasurement Process(const Frame& frame);
+
+  // Pose of the current camera obtained by chaining the visual motion estimates from the first
+  // frame (identity): visual odometry, drifting like any dead reckoning. When tracking is lost
+  // for a frame, the last velocity is assumed for it.
+  const Pose& dead_reckoning_T_w_c() const { return T_w_cur_; }
+
+  const StereoRig& rig() const { return rig_; }
+
+ private:
+  // What is kept of a processed frame for the next ones.
+  struct TrackedFrame {
+    FrameId id;
+    DetectedImage detection;
+    std::vector<LandmarkId> landmark;  // Per point; invalid when the point has none yet.
+    std::vector<int> track_length;
+    std::vector<std::optional<StereoPoint>> stereo;
+    Pose T_w_c = Pose::Identity();  // Dead-reckoned pose.
+  };
+
+  // Matches prev -> cur around the predicted positions; empty prediction = no prior.
+  std::vector<Match> MatchTemporal(const TrackedFrame& from, const DetectedImage& cur,
+                                   const Pose* T_from_cur) const;
+  // Inherits ids from `prev` through the motion inliers; returns the motion, if any.
+  std::optional<MotionEstimate> TrackFromPrevious(TrackedFrame* cur);
+  void ReacquireFromKeyframe(TrackedFrame* cur) const;
+
+  StereoRig rig_;
+  FrontendOptions options_;
+  MotionEstimator motion_estimator_;
+  KeyframePolicy keyframe_policy_;
+  std::optional<TrackedFrame> prev_;
+  std::optional<TrackedFrame> keyframe_;
+  Pose velocity_T_prev_cur_ = Pose::Identity();
+  Pose T_w_cur_ = Pose::Identity();
+  int64_t next_landmark_ = 0;
+  int frames_since_keyframe_ = 0;
+};
+
+}  // namespace dala
+
+#endif  // DALA_FRONTEND_FRONTEND_H_

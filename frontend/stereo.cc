@@ -1,0 +1,100 @@
+#include "frontend/stereo.h"
+
+#include <glog/logging.h>
+
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+namespace dala {
+namespace {
+
+// SSD between the left window and the right window centred at (u, v); NaN outside the image.
+double WindowSsd(const cv::Mat& left_window, const cv::Mat& right_gray, double u, double v,
+                 int side) {
+  const double half = 0.5 * (side - 1);
+  if (u - half < 0 || v - half < 0 || u + half > right_gray.cols - 1 ||
+      v + half > right_gray.rows - 1) {
+    return std::nan("");
+  }
+  cv::Mat right_window;
+  cv::getRectSubPix(right_gray, cv::Size(side, side), cv::Point2f(u, v), right_window, CV_32F);
+  return cv::norm(left_window, right_window, cv::NORM_L2SQR);
+}
+
+// Returns the refined right abscissa, or the input when the refinement is not defined.
+double RefineRightAbscissa(const cv::Mat& left_gray, const cv::Mat& right_gray,
+                           const Eigen::Vector2d& uv_left, double u_right, int side) {
+  const double half = 0.5 * (side - 1);
+  if (uv_left.x() - half < 0 || uv_left.y() - half < 0 || uv_left.x() + half > left_gray.cols - 1 ||
+      uv_left.y() + half > left_gray.rows - 1) {
+    return u_right;
+  }
+  cv::Mat left_window;
+  cv::getRectSubPix(left_gray, cv::Size(side, side), cv::Point2f(uv_left.x(), uv_left.y()),
+                    left_window, CV_32F);
+  const double v = uv_left.y();
+  const double u0 = std::round(u_right);
+  const double sm = WindowSsd(left_window, right_gray, u0 - 1, v, side);
+  const double s0 = WindowSsd(left_window, right_gray, u0, v, side);
+  const double sp = WindowSsd(left_window, right_gray, u0 + 1, v, side);
+  if (!std::isfinite(sm) || !std::isfinite(s0) || !std::isfinite(sp)) return u_right;
+  const double curvature = sm - 2 * s0 + sp;
+  // Not a minimum at u0: the match sits on a slope of the SSD, keep the detector's position.
+  if (curvature <= 0 || s0 > sm || s0 > sp) return u_right;
+  return u0 + 0.5 * (sm - sp) / curvature;
+}
+
+}  // namespace
+
+bool StereoOptions::IsValid(std::string* why) const {
+  const auto fail = [&](const char* msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (!matcher.IsValid(why)) return false;
+  if (max_dv_px <= 0) return fail("stereo.max_dv_px must be > 0");
+  if (min_depth_m <= 0 || max_depth_m <= min_depth_m)
+    return fail("stereo: need 0 < min_depth_m < max_depth_m");
+  if (refine_window < 3 || refine_window % 2 == 0)
+    return fail("stereo.refine_window must be odd and >= 3");
+  if (sigma_px <= 0 || sigma_disparity <= 0) return fail("stereo sigmas must be > 0");
+  return true;
+}
+
+std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig,
+                                                    const DetectedImage& left,
+                                                    const DetectedImage& right,
+                                                    const cv::Mat& left_gray,
+                                                    const cv::Mat& right_gray,
+                                                    const StereoOptions& options) {
+  CHECK(rig.is_stereo()) << "MatchStereo needs a stereo rig";
+  const double fb = rig.left.fx * rig.baseline;
+  const double min_disparity = fb / options.max_depth_m;
+  const double max_disparity = fb / options.min_depth_m;
+  const MatchPrior prior =
+      MatchPrior::RectifiedStereo(options.max_dv_px, min_disparity, max_disparity);
+  MatcherOptions matcher = options.matcher;
+  matcher.geometric_check = GeometricCheck::kEpipolarRectified;
+  matcher.epipolar_max_dv = options.max_dv_px;
+  matcher.min_disparity = min_disparity;
+  matcher.max_disparity = max_disparity;
+  const std::vector<Match> matches = MatchPoints(left, right, matcher, &prior);
+
+  std::vector<std::optional<StereoPoint>> out(left.points.size());
+  for (const Match& m : matches) {
+    const Eigen::Vector2d& uv = left.points[m.i].uv;
+    const double u_right = RefineRightAbscissa(left_gray, right_gray, uv,
+                                               right.points[m.j].uv.x(), options.refine_window);
+    const Eigen::Vector3d uvd(uv.x(), uv.y(), uv.x() - u_right);
+    if (uvd.z() < min_disparity || uvd.z() > max_disparity) continue;
+    StereoPoint sp;
+    sp.u_right = u_right;
+    if (!rig.Triangulate(uvd, &sp.p_c0)) continue;
+    sp.cov_p_c0 = rig.TriangulationCovariance(uvd, options.sigma_px, options.sigma_disparity);
+    out[m.i] = sp;
+  }
+  return out;
+}
+
+}  // namespace dala

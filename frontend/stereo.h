@@ -1,0 +1,55 @@
+#ifndef DALA_FRONTEND_STEREO_H_
+#define DALA_FRONTEND_STEREO_H_
+
+// Stereo matching on a rectified pair: the robust matcher with the epipolar prior (same row,
+// disparity in the range that the depth limits allow), a sub-pixel disparity refined by
+// correlation along the row, and the triangulated point with its first-order covariance.
+//
+// Sub-pixel disparity: the right abscissa u_r of a match is refined by minimising the SSD between
+// the left window centred at (u_l, v_l) and right windows centred at (u_r + k, v_l), k in
+// {-1, 0, +1} (bilinear sampling), and taking the vertex of the parabola through the three SSDs.
+// Using the left point's own row keeps the pair on one epipolar line, so the disparity is
+// measured at the left point's sub-pixel position (the one the estimators use).
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/camera.h"
+#include "frontend/harris.h"
+#include "frontend/matcher.h"
+
+namespace dala {
+
+struct StereoOptions {
+  MatcherOptions matcher = MatcherOptions::ForStereo();
+  double max_dv_px = 1.5;     // Rows of a rectified pair agree to this (calibration error).
+  double min_depth_m = 0.3;   // Points nearer than this are rejected (disparity upper bound).
+  double max_depth_m = 80.0;  // Farther points are rejected: their depth is too uncertain.
+  int refine_window = 7;      // Side of the SSD window of the sub-pixel refinement (odd).
+  double sigma_px = 1.0;      // Image noise (u, v), pixels.
+  double sigma_disparity = 1.0;  // Disparity noise after refinement, pixels.
+
+  bool IsValid(std::string* why) const;
+};
+
+// The stereo result for one left point.
+struct StereoPoint {
+  double u_right = 0;
+  Eigen::Vector3d p_c0 = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d cov_p_c0 = Eigen::Matrix3d::Zero();
+};
+
+// One entry per left point: empty when the point has no stereo match (or an invalid depth).
+std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig,
+                                                    const DetectedImage& left,
+                                                    const DetectedImage& right,
+                                                    const cv::Mat& left_gray,
+                                                    const cv::Mat& right_gray,
+                                                    const StereoOptions& options);
+
+}  // namespace dala
+
+#endif  // DALA_FRONTEND_STEREO_H_
