@@ -23,7 +23,7 @@ DEFINE_double(max_diff, 0.01,
               "Maximum time difference in seconds for two stamps to be "
               "associated (TUM/evo association)");
 DEFINE_string(plot, "", "Write a PNG plot (top view and ATE along the path) to this file");
-DEFINE_bool(json, false, "Print one JSON object on stdout instead of the table");
+DECLARE_bool(json);  // tools/common_flags.cc
 DEFINE_string(times, "",
               "KITTI times.txt (one time in seconds per line) applied to the KITTI "
               "file(s), which have no stamps, so that they associate by time");

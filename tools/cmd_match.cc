@@ -20,9 +20,8 @@
 #include "tools/command.h"
 
 // NOTE for the coordinator: `out` and `json` are generic names that other commands (synth, eval)
-// may also DEFINE; when merging, keep one DEFINE and turn the others into DECLARE_*.
-DEFINE_string(out, "", "match: write the drawing of the matches to this image file (PNG, JPG)");
-DEFINE_bool(json, false, "match: print {\"matches\", \"correct\", \"precision\", \"ms\"} as JSON");
+DECLARE_string(out);  // tools/common_flags.cc
+DECLARE_bool(json);  // tools/common_flags.cc
 DEFINE_string(homography, "",
               "match: ground-truth 3x3 homography mapping A to B (OpenCV XML/YAML file with a "
               "3x3 matrix node, or a text file of 9 numbers, row-major)");

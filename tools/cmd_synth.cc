@@ -11,8 +11,7 @@
 #include "core/sim/world.h"
 #include "tools/command.h"
 
-// `out` is defined here; other commands (e.g. `dala run`) DECLARE it.
-DEFINE_string(out, "", "output folder (created if missing)");
+DECLARE_string(out);  // tools/common_flags.cc
 DEFINE_string(preset, "rover_loop",
               "scene and camera path: rover_loop, flight, rotation, fast, low_texture, false_loop");
 DEFINE_int32(frames, 0, "number of frames (0 = the preset's default duration x fps)");

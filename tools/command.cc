@@ -38,11 +38,13 @@ void PrintCommandHelp(const Command& command, std::ostream& os) {
   gflags::GetAllFlags(&flags);
   bool header = false;
   for (const auto& f : flags) {
-    if (!EndsWith(command.source_file, f.filename) && !EndsWith(f.filename, command.source_file)) {
-      // gflags stores the file name as given to the compiler; compare by basename.
-      const auto base = [](const std::string& p) { return p.substr(p.find_last_of('/') + 1); };
-      if (base(f.filename) != base(command.source_file)) continue;
-    }
+    // gflags stores the file name as given to the compiler; compare by basename. Shared flags
+    // (tools/common_flags.cc) are listed when the command's usage mentions them.
+    const auto base = [](const std::string& p) { return p.substr(p.find_last_of('/') + 1); };
+    const bool own = base(f.filename) == base(command.source_file);
+    const bool shared = base(f.filename) == "common_flags.cc" &&
+                        command.usage.find("--" + f.name) != std::string::npos;
+    if (!own && !shared) continue;
     if (!header) {
       os << "\nflags:\n";
       header = true;
