@@ -418,11 +418,14 @@ void BuildTerrain(Scene* scene, uint64_t seed) {
 
 const std::vector<PresetInfo>& Presets() {
   static const std::vector<PresetInfo> presets = {
-      {"rover_loop", "ground rover, one loop of a ~190 m street circuit between buildings", 100.0},
+      {"rover_loop",
+       "ground rover, one loop (~250 m, 2.5 m/s) of a street circuit between buildings", 100.0},
       {"flight", "6-DoF blimp-like figure eight 30-40 m over textured terrain, looking down",
        120.0},
       {"rotation", "pure rotation in place (a full turn) in the middle of a street", 20.0},
-      {"fast", "the rover loop at ~5 m/s with jerky heading, pitch, roll and height", 40.0},
+      {"fast",
+       "the rover loop at ~6 m/s with jerky heading, pitch, roll, height and sideways motion",
+       40.0},
       {"low_texture", "the rover loop in a city of weak, sparse texture", 100.0},
       {"false_loop",
        "straight 200 m street whose stretches at x=40-85 m and x=140-185 m look identical "
