@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 
@@ -77,7 +78,12 @@ void WriteMarker(const std::string& path, const SyntheticSequence& seq) {
      << "dala-synthetic";
   fs << "version" << 1;
   fs << "preset" << o.preset;
-  fs << "seed" << std::to_string(o.seed);
+  // FileStorage has no 64-bit integers: the seed is an int when it fits, else a string.
+  if (o.seed <= static_cast<uint64_t>(std::numeric_limits<int>::max())) {
+    fs << "seed" << static_cast<int>(o.seed);
+  } else {
+    fs << "seed" << std::to_string(o.seed);
+  }
   fs << "width" << c.width << "height" << c.height;
   fs << "fx" << c.fx << "fy" << c.fy << "cx" << c.cx << "cy" << c.cy;
   fs << "baseline" << (o.stereo ? o.baseline : 0.0);
