@@ -1,9 +1,13 @@
 #include "core/sim/dataset_writer.h"
 
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 #include "core/error.h"
 #include "core/io/atomic_file.h"
@@ -40,15 +44,28 @@ void WriteCalib(const std::string& path, const SyntheticSequence& seq) {
   });
 }
 
+// Points with duplicates (corners shared by adjacent patches, to 1 mm) removed, first kept.
+std::vector<Eigen::Vector3d> UniquePoints(const std::vector<Eigen::Vector3d>& points) {
+  std::set<std::array<int64_t, 3>> seen;
+  std::vector<Eigen::Vector3d> unique;
+  for (const Eigen::Vector3d& p : points) {
+    const std::array<int64_t, 3> key = {std::llround(p.x() * 1e3), std::llround(p.y() * 1e3),
+                                        std::llround(p.z() * 1e3)};
+    if (seen.insert(key).second) unique.push_back(p);
+  }
+  return unique;
+}
+
 // Minimal ASCII PLY of points (a private detail of the simulator; core/io has the general
 // writer for maps).
 void WritePointsPly(const std::string& path, const std::vector<Eigen::Vector3d>& points) {
   WriteFileAtomically(path, [&](std::ostream& os) {
+    const std::vector<Eigen::Vector3d> unique = UniquePoints(points);
     os << "ply\nformat ascii 1.0\ncomment dala synthetic scene points, world frame (z up)\n"
-       << "element vertex " << points.size()
+       << "element vertex " << unique.size()
        << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
     os << std::setprecision(9);
-    for (const auto& p : points) os << p.x() << " " << p.y() << " " << p.z() << "\n";
+    for (const auto& p : unique) os << p.x() << " " << p.y() << " " << p.z() << "\n";
   });
 }
 
@@ -61,7 +78,12 @@ void WriteMarker(const std::string& path, const SyntheticSequence& seq) {
      << "dala-synthetic";
   fs << "version" << 1;
   fs << "preset" << o.preset;
-  fs << "seed" << std::to_string(o.seed);
+  // FileStorage has no 64-bit integers: the seed is an int when it fits, else a string.
+  if (o.seed <= static_cast<uint64_t>(std::numeric_limits<int>::max())) {
+    fs << "seed" << static_cast<int>(o.seed);
+  } else {
+    fs << "seed" << std::to_string(o.seed);
+  }
   fs << "width" << c.width << "height" << c.height;
   fs << "fx" << c.fx << "fy" << c.fy << "cx" << c.cx << "cy" << c.cy;
   fs << "baseline" << (o.stereo ? o.baseline : 0.0);

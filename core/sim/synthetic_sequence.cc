@@ -2,6 +2,7 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -37,8 +38,8 @@ bool SimOptions::IsValid(std::string* why) const {
     os << "baseline must be > 0 for stereo, got " << baseline;
   } else if (!(noise_sigma >= 0)) {
     os << "noise sigma must be >= 0, got " << noise_sigma;
-  } else if (motion_blur && (blur_samples < 2 || blur_samples > 64)) {
-    os << "blur_samples must be in 2..64, got " << blur_samples;
+  } else if (motion_blur && (blur_samples == 1 || blur_samples < 0 || blur_samples > 64)) {
+    os << "blur_samples must be 0 (automatic) or in 2..64, got " << blur_samples;
   } else if (motion_blur && !(exposure_fraction > 0 && exposure_fraction <= 1)) {
     os << "exposure_fraction must be in (0, 1], got " << exposure_fraction;
   } else if (!(brightness_change >= 0 && brightness_change < 1)) {
@@ -110,8 +111,17 @@ cv::Mat SyntheticSequence::RenderCamera(size_t i, int cam) const {
   const Pose T_c0_c = cam == 0 ? Pose::Identity() : T_c0_c1();
   cv::Mat radiance;
   if (options_.motion_blur) {
-    const int n = options_.blur_samples;
     const double exposure = options_.exposure_fraction / options_.fps;
+    int n = options_.blur_samples;
+    if (n == 0) {
+      // Image motion over the exposure: rotation angle times the focal length plus the
+      // translation's parallax at 4 m (the nearest surfaces a rover sees).
+      const Pose d =
+          world_.path->T_w_c(t - exposure / 2).inverse() * world_.path->T_w_c(t + exposure / 2);
+      const double pixels = std::max(camera_.fx, camera_.fy) *
+                            (LogSO3(d.linear()).norm() + d.translation().norm() / 4.0);
+      n = std::clamp(static_cast<int>(std::ceil(pixels / 3.0)) + 1, 2, 12);
+    }
     cv::Mat sum = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1), sample;
     for (int k = 0; k < n; ++k) {
       const double tk = t + exposure * (static_cast<double>(k) / (n - 1) - 0.5);

@@ -51,11 +51,13 @@ struct SimOptions {
   bool stereo = true;
   // Standard deviation of the additive Gaussian image noise (grey levels, 0 = none).
   double noise_sigma = 1.0;
-  // Motion blur: average of `blur_samples` renders over an exposure of `exposure_fraction` of
-  // the frame interval, centred on the frame time (the ground-truth pose).
+  // Motion blur: average of renders at poses spread over an exposure of `exposure_fraction`
+  // of the frame interval, centred on the frame time (the ground-truth pose). blur_samples = 0
+  // chooses the number from the image motion during the exposure (about one render per
+  // 3 pixels of motion, 2..12) so the blur is smooth, not a few ghost copies.
   bool motion_blur = false;
-  int blur_samples = 5;
-  double exposure_fraction = 0.5;
+  int blur_samples = 0;
+  double exposure_fraction = 0.3;
   // Global brightness change: image gain 1 + brightness_change * sin(2 pi t / 6.3 s + phase),
   // phase from the seed; the right camera's gain differs by a further +2% of it. 0 = constant.
   double brightness_change = 0.0;

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
+#include <mutex>
+#include <tuple>
 
 #include "core/sim/random.h"
 
@@ -332,10 +335,26 @@ void AddSkyline(SimRng& rng, SceneBuilder& builder, const Eigen::Vector2d& centr
   }
 }
 
+// Textures are shared between worlds built from the same seed (tests build several sequences
+// of one seed): a cache of weak references, so a texture lives as long as a world uses it.
+std::shared_ptr<const Texture> CachedTexture(uint64_t seed, TextureStyle style, int side) {
+  static std::mutex mutex;
+  static std::map<std::tuple<uint64_t, int, int>, std::weak_ptr<const Texture>> cache;
+  const auto key = std::make_tuple(seed, static_cast<int>(style), side);
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (auto texture = cache[key].lock()) return texture;
+  }
+  // Built outside the lock; two threads may both build it, with identical results.
+  auto texture = std::make_shared<const Texture>(MakeTextureImage(seed, style, side));
+  std::lock_guard<std::mutex> lock(mutex);
+  cache[key] = texture;
+  return texture;
+}
+
 void AddTextures(Scene* scene, uint64_t seed, TextureStyle style, int side) {
   for (int k = 0; k < kNumTextures; ++k) {
-    scene->textures.push_back(
-        std::make_shared<Texture>(MakeTextureImage(MixSeed(seed, 100 + k), style, side)));
+    scene->textures.push_back(CachedTexture(MixSeed(seed, 100 + k), style, side));
   }
 }
 
@@ -418,11 +437,14 @@ void BuildTerrain(Scene* scene, uint64_t seed) {
 
 const std::vector<PresetInfo>& Presets() {
   static const std::vector<PresetInfo> presets = {
-      {"rover_loop", "ground rover, one loop of a ~190 m street circuit between buildings", 100.0},
+      {"rover_loop",
+       "ground rover, one loop (~250 m, 2.5 m/s) of a street circuit between buildings", 100.0},
       {"flight", "6-DoF blimp-like figure eight 30-40 m over textured terrain, looking down",
        120.0},
       {"rotation", "pure rotation in place (a full turn) in the middle of a street", 20.0},
-      {"fast", "the rover loop at ~5 m/s with jerky heading, pitch, roll and height", 40.0},
+      {"fast",
+       "the rover loop at ~6 m/s with jerky heading, pitch, roll, height and sideways motion",
+       40.0},
       {"low_texture", "the rover loop in a city of weak, sparse texture", 100.0},
       {"false_loop",
        "straight 200 m street whose stretches at x=40-85 m and x=140-185 m look identical "

@@ -106,6 +106,7 @@ TEST(DatasetWriterTest, WritesKittiLikeStereoFolder) {
   EXPECT_EQ(static_cast<int>(marker["version"]), 1);
   EXPECT_EQ(static_cast<std::string>(marker["preset"]), "flight");
   EXPECT_EQ(static_cast<int>(marker["frames"]), 3);
+  EXPECT_EQ(static_cast<int>(marker["seed"]), 1);
   EXPECT_EQ(static_cast<int>(marker["width"]), 160);
   EXPECT_DOUBLE_EQ(static_cast<double>(marker["baseline"]), 0.5);
   EXPECT_DOUBLE_EQ(static_cast<double>(marker["fps"]), 10.0);
