@@ -139,9 +139,8 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
   std::vector<float> weights;
   for (int dy = -r_o; dy <= r_o; ++dy) {
     for (int dx = -r_o; dx <= r_o; ++dx) {
-      weights.push_back(static_cast<float>(std::exp(-(dx * dx + dy * dy) /
-                                                    (2.0 * options.sigma_orientation *
-                                                     options.sigma_orientation))));
+      weights.push_back(static_cast<float>(std::exp(
+          -(dx * dx + dy * dy) / (2.0 * options.sigma_orientation * options.sigma_orientation))));
     }
   }
   const float min_ratio = static_cast<float>(options.min_eigen_ratio);
@@ -178,8 +177,10 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
       if (std::abs(ox) > 0.75 || std::abs(oy) > 0.75) ox = oy = 0.0;  // Fit not trustworthy.
     }
     if (cell > 0) {  // Bucket of the refined position (pixel x covers [x - 0.5, x + 0.5)).
-      const int bx = std::clamp(static_cast<int>(std::floor((c.x + ox + 0.5) / cell)), 0, cells_x - 1);
-      const int by = std::clamp(static_cast<int>(std::floor((c.y + oy + 0.5) / cell)), 0, cells_y - 1);
+      const int bx =
+          std::clamp(static_cast<int>(std::floor((c.x + ox + 0.5) / cell)), 0, cells_x - 1);
+      const int by =
+          std::clamp(static_cast<int>(std::floor((c.y + oy + 0.5) / cell)), 0, cells_y - 1);
       int& n = count[static_cast<size_t>(by) * cells_x + bx];
       if (n >= options.max_per_cell) continue;
       ++n;

@@ -20,8 +20,8 @@ using testing::Warp;
 
 // Fraction of A's points whose image under H (inside B, away from the border) has a B point
 // within `tol` pixels.
-double Repeatability(const DetectedImage& a, const DetectedImage& b, const cv::Mat& H,
-                     double tol, int* considered) {
+double Repeatability(const DetectedImage& a, const DetectedImage& b, const cv::Mat& H, double tol,
+                     int* considered) {
   std::vector<Eigen::Vector2d> uv_b;
   for (const auto& p : b.points) uv_b.push_back(p.uv);
   SpatialGrid grid(uv_b, 16.0);
@@ -145,12 +145,12 @@ TEST(HarrisTest, BucketingSpreadsPoints) {
     std::vector<int> count((640 / 40) * (480 / 40), 0);
     for (const auto& p : d.points) {
       // Pixel x covers [x - 0.5, x + 0.5): the cell of a refined point is floor((u + 0.5) / 40).
-      ++count[static_cast<int>((p.uv.y() + 0.5) / 40) * 16 + static_cast<int>((p.uv.x() + 0.5) / 40)];
+      ++count[static_cast<int>((p.uv.y() + 0.5) / 40) * 16 +
+              static_cast<int>((p.uv.x() + 0.5) / 40)];
     }
     *max_count = *std::max_element(count.begin(), count.end());
-    *occupied = static_cast<int>(std::count_if(count.begin(), count.end(), [](int c) {
-      return c > 0;
-    }));
+    *occupied =
+        static_cast<int>(std::count_if(count.begin(), count.end(), [](int c) { return c > 0; }));
   };
   int max_count = 0, occupied = 0;
   count_cells(DetectHarris(img, o), &max_count, &occupied);
@@ -205,9 +205,9 @@ TEST(HarrisTest, RepeatableUnderRotationAndScale) {
   struct Case {
     double angle_deg, scale, min_a_to_b, min_b_to_a;
   };
-  for (const Case& c : {Case{0.0, 1.0, 0.99, 0.99}, Case{30.0, 1.0, 0.77, 0.77},
-                        Case{90.0, 1.0, 0.78, 0.78}, Case{0.0, 1.5, 0.77, 0.67},
-                        Case{45.0, 2.0, 0.63, 0.55}}) {
+  for (const Case& c :
+       {Case{0.0, 1.0, 0.99, 0.99}, Case{30.0, 1.0, 0.77, 0.77}, Case{90.0, 1.0, 0.78, 0.78},
+        Case{0.0, 1.5, 0.77, 0.67}, Case{45.0, 2.0, 0.63, 0.55}}) {
     const cv::Mat H = SimilarityAboutCentre(img.size(), c.angle_deg * M_PI / 180.0, c.scale);
     const DetectedImage b = DetectHarris(Warp(img, H), o);
     int n = 0;
@@ -221,9 +221,9 @@ TEST(HarrisTest, RepeatableUnderRotationAndScale) {
 
 TEST(HarrisTest, KittiFrameGivesManyWellSpreadPoints) {
   DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
-  const cv::Mat img = cv::imread(
-      ::dala::testing::SharedDataDir() + "/kitti06_0000-0050/image_0/000000.png",
-      cv::IMREAD_GRAYSCALE);
+  const cv::Mat img =
+      cv::imread(::dala::testing::SharedDataDir() + "/kitti06_0000-0050/image_0/000000.png",
+                 cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(img.empty());
   const DetectedImage d = DetectHarris(img, HarrisOptions());
   EXPECT_GT(d.points.size(), 800u);
