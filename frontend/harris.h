@@ -65,8 +65,10 @@ struct HarrisOptions {
 
 // One pyramid level: what detection computed and the matcher reuses.
 struct PyramidLevel {
-  cv::Mat smoothed;                     // CV_32F, G(sigma_d) * I_l.
-  double scale_x = 1.0, scale_y = 1.0;  // Level-0 pixels per level pixel along x and y.
+  cv::Mat smoothed;  // CV_32F, G(sigma_d) * I_l.
+  // Level pixel (u_l, v_l) is level-0 pixel (scale_x u_l + offset_x, scale_y v_l + offset_y).
+  double scale_x = 1.0, scale_y = 1.0;  // Level-0 pixels per level pixel.
+  double offset_x = 0.0, offset_y = 0.0;
 };
 
 // The detection result for one image, computed once and reused by every match involving it.

@@ -72,8 +72,8 @@ TEST(HarrisTest, FlatImageHasNoPoints) {
 
 // An X-junction (two opposite bright quadrants) centred at a sub-pixel position, rendered by
 // area averaging of a 16x supersampled image. By symmetry its Harris maximum is the centre.
-cv::Mat XJunction(double cx, double cy) {
-  const int s = 16, w = 64, h = 64;
+cv::Mat XJunction(double cx, double cy, int w = 64, int h = 64) {
+  const int s = 16;
   cv::Mat big(h * s, w * s, CV_8UC1);
   for (int y = 0; y < big.rows; ++y) {
     for (int x = 0; x < big.cols; ++x) {
@@ -107,6 +107,25 @@ TEST(HarrisTest, SubPixelAccuracyOnSyntheticCorner) {
   // Integer maxima alone would be off by up to 0.7 px; the quadratic fit leaves ~0.12 px per
   // axis (measured 0.174 px in norm), a bias towards pixel boundaries.
   EXPECT_LT(max_err, 0.2);
+}
+
+// An X-junction looks the same at every scale: each pyramid level must find it at the same
+// level-0 position, which checks the level -> level-0 coordinate maps (resize and pyrDown).
+TEST(HarrisTest, PyramidLevelsAgreeInLevelZeroCoordinates) {
+  const double cx = 80.3, cy = 75.6;
+  HarrisOptions o;
+  o.num_levels = 4;
+  o.border = 4;
+  const DetectedImage d = DetectHarris(XJunction(cx, cy, 160, 150), o);
+  ASSERT_EQ(d.pyramid.size(), 4u);
+  std::vector<bool> found(4, false);
+  for (const auto& p : d.points) {
+    if ((p.uv - Eigen::Vector2d(cx, cy)).norm() < 3.0) {
+      EXPECT_LT((p.uv - Eigen::Vector2d(cx, cy)).norm(), 0.25 * p.scale) << "level " << p.level;
+      found[p.level] = true;
+    }
+  }
+  for (int l = 0; l < 4; ++l) EXPECT_TRUE(found[l]) << "level " << l;
 }
 
 TEST(HarrisTest, AttributesAreConsistent) {
@@ -174,9 +193,12 @@ TEST(HarrisTest, Deterministic) {
 }
 
 TEST(HarrisTest, OrientationFollowsAnExactRotation) {
-  const cv::Mat img = MakeTexturedImage(480, 480, 13);
+  // 493 px: every level's sampling grid (area resize to 349 px, pyrDown to 247 and 175) maps
+  // onto itself under the rotation, so the pyramids of both images hold the same samples.
+  const int size = 493;
+  const cv::Mat img = MakeTexturedImage(size, size, 13);
   cv::Mat rotated;
-  cv::rotate(img, rotated, cv::ROTATE_90_CLOCKWISE);  // (x, y) -> (479 - y, x), no resampling.
+  cv::rotate(img, rotated, cv::ROTATE_90_CLOCKWISE);  // (x, y) -> (size-1 - y, x), exact.
   HarrisOptions o;
   const DetectedImage a = DetectHarris(img, o), b = DetectHarris(rotated, o);
   std::vector<Eigen::Vector2d> uv_b;
@@ -184,7 +206,7 @@ TEST(HarrisTest, OrientationFollowsAnExactRotation) {
   SpatialGrid grid(uv_b, 16.0);
   int n = 0, good = 0;
   for (const auto& p : a.points) {
-    const Eigen::Vector2d q(479.0 - p.uv.y(), p.uv.x());
+    const Eigen::Vector2d q(size - 1.0 - p.uv.y(), p.uv.x());
     for (int j : grid.InRadius(q, 0.3)) {
       if (b.points[j].level != p.level) continue;
       ++n;
