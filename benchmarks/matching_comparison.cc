@@ -7,12 +7,11 @@
 // Pairs are made from a procedural textured image (tests/frontend/test_images.h) and, when the
 // shared data is present, from KITTI 06 frame 0 (a real image).
 
-#include <opencv2/features2d.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
@@ -98,7 +97,8 @@ std::vector<Pair> MakePairs() {
   using dala::testing::Warp;
   std::vector<std::pair<std::string, cv::Mat>> bases;
   bases.emplace_back("synth", dala::testing::MakeTexturedImage(640, 480, 7));
-  const std::string kitti = std::string(DALA_SHARED_DATA_DIR) + "/kitti06_0000-0050/image_0/000000.png";
+  const std::string kitti =
+      std::string(DALA_SHARED_DATA_DIR) + "/kitti06_0000-0050/image_0/000000.png";
   if (std::filesystem::exists(kitti)) {
     cv::Mat k = cv::imread(kitti, cv::IMREAD_GRAYSCALE);
     if (!k.empty()) bases.emplace_back("kitti", k);
@@ -110,8 +110,8 @@ std::vector<Pair> MakePairs() {
   for (const auto& [base_name, img] : bases) {
     for (double angle : {0.0, 30.0, 60.0, 90.0, 135.0, 180.0}) {
       cv::Mat H = SimilarityAboutCentre(img.size(), angle * deg, 1.0);
-      pairs.push_back({base_name + " rot " + std::to_string(static_cast<int>(angle)), img,
-                       Warp(img, H), H});
+      pairs.push_back(
+          {base_name + " rot " + std::to_string(static_cast<int>(angle)), img, Warp(img, H), H});
     }
     for (double scale : {1.25, 1.5, 2.0}) {
       cv::Mat H = SimilarityAboutCentre(img.size(), 0.0, scale);
@@ -153,11 +153,12 @@ int main(int argc, char** argv) {
     return std::string(buf);
   };
   if (markdown) {
-    std::printf("| pair | dala (no check) | dala + homography | ORB 2000 + ratio | SIFT + ratio |\n");
+    std::printf(
+        "| pair | dala (no check) | dala + homography | ORB 2000 + ratio | SIFT + ratio |\n");
     std::printf("|---|---|---|---|---|\n");
   } else {
-    std::printf("%-28s | %-18s | %-18s | %-18s | %-18s\n", "pair (precision correct ms)",
-                "dala", "dala+H", "ORB", "SIFT");
+    std::printf("%-28s | %-18s | %-18s | %-18s | %-18s\n", "pair (precision correct ms)", "dala",
+                "dala+H", "ORB", "SIFT");
   }
   auto orb = cv::ORB::create(2000);
   auto sift = cv::SIFT::create();

@@ -71,7 +71,7 @@ cv::Size KernelSize(double sigma) {
 // Per-thread scratch images reused across calls: fresh multi-megabyte buffers on every call
 // cost more in page faults than the filtering itself.
 struct Workspace {
-  cv::Mat ix, iy, mxx, mxy, myy, response, dilated;
+  cv::Mat ix, iy, product, mxx, mxy, myy, response, dilated;
 };
 
 // Detects the points of one level and appends them (level-0 coordinates) to `out`.
@@ -86,16 +86,21 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
   cv::Sobel(smoothed, ix, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REFLECT_101);
   cv::Sobel(smoothed, iy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REFLECT_101);
   // Gaussian-weighted auto-correlation products.
+  // Products into a scratch image, blurred into their own buffer: OpenCV copies the source of
+  // an in-place filter first.
+  const cv::Size ksize_i = KernelSize(options.sigma_i);
   cv::Mat& mxx = ws.mxx;
   cv::Mat& mxy = ws.mxy;
   cv::Mat& myy = ws.myy;
-  cv::multiply(ix, ix, mxx);
-  cv::multiply(ix, iy, mxy);
-  cv::multiply(iy, iy, myy);
-  const cv::Size ksize_i = KernelSize(options.sigma_i);
-  for (cv::Mat* m : {&mxx, &mxy, &myy}) {
-    cv::GaussianBlur(*m, *m, ksize_i, options.sigma_i, options.sigma_i, cv::BORDER_REFLECT_101);
-  }
+  cv::multiply(ix, ix, ws.product);
+  cv::GaussianBlur(ws.product, mxx, ksize_i, options.sigma_i, options.sigma_i,
+                   cv::BORDER_REFLECT_101);
+  cv::multiply(ix, iy, ws.product);
+  cv::GaussianBlur(ws.product, mxy, ksize_i, options.sigma_i, options.sigma_i,
+                   cv::BORDER_REFLECT_101);
+  cv::multiply(iy, iy, ws.product);
+  cv::GaussianBlur(ws.product, myy, ksize_i, options.sigma_i, options.sigma_i,
+                   cv::BORDER_REFLECT_101);
   cv::Mat& response = ws.response;
   response.create(smoothed.size(), CV_32F);
   const float k = static_cast<float>(options.k);
@@ -139,9 +144,8 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
   std::vector<float> weights;
   for (int dy = -r_o; dy <= r_o; ++dy) {
     for (int dx = -r_o; dx <= r_o; ++dx) {
-      weights.push_back(static_cast<float>(std::exp(-(dx * dx + dy * dy) /
-                                                    (2.0 * options.sigma_orientation *
-                                                     options.sigma_orientation))));
+      weights.push_back(static_cast<float>(std::exp(
+          -(dx * dx + dy * dy) / (2.0 * options.sigma_orientation * options.sigma_orientation))));
     }
   }
   const float min_ratio = static_cast<float>(options.min_eigen_ratio);
@@ -178,8 +182,10 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
       if (std::abs(ox) > 0.75 || std::abs(oy) > 0.75) ox = oy = 0.0;  // Fit not trustworthy.
     }
     if (cell > 0) {  // Bucket of the refined position (pixel x covers [x - 0.5, x + 0.5)).
-      const int bx = std::clamp(static_cast<int>(std::floor((c.x + ox + 0.5) / cell)), 0, cells_x - 1);
-      const int by = std::clamp(static_cast<int>(std::floor((c.y + oy + 0.5) / cell)), 0, cells_y - 1);
+      const int bx =
+          std::clamp(static_cast<int>(std::floor((c.x + ox + 0.5) / cell)), 0, cells_x - 1);
+      const int by =
+          std::clamp(static_cast<int>(std::floor((c.y + oy + 0.5) / cell)), 0, cells_y - 1);
       int& n = count[static_cast<size_t>(by) * cells_x + bx];
       if (n >= options.max_per_cell) continue;
       ++n;
@@ -189,8 +195,8 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
     const double half_tr = 0.5 * (m0 + m2);
     const double disc = std::sqrt(std::max(0.0, half_tr * half_tr - (m0 * m2 - m1 * m1)));
     InterestPoint p;
-    p.uv = Eigen::Vector2d((c.x + ox + 0.5) * level.scale_x - 0.5,
-                           (c.y + oy + 0.5) * level.scale_y - 0.5);
+    p.uv = Eigen::Vector2d((c.x + ox) * level.scale_x + level.offset_x,
+                           (c.y + oy) * level.scale_y + level.offset_y);
     p.cornerness = c.r;
     p.lambda1 = static_cast<float>(half_tr + disc);
     p.lambda2 = static_cast<float>(half_tr - disc);
@@ -227,20 +233,43 @@ bool SamplePatch(const DetectedImage& image, const Eigen::Vector2d& uv, double o
   }
   const PyramidLevel& level = image.pyramid[best];
   const double level_scale = 0.5 * (level.scale_x + level.scale_y);
-  const double cx = (uv.x() + 0.5) / level.scale_x - 0.5;
-  const double cy = (uv.y() + 0.5) / level.scale_y - 0.5;
+  const double cx = (uv.x() - level.offset_x) / level.scale_x;
+  const double cy = (uv.y() - level.offset_y) / level.scale_y;
   const double step = image.patch_spacing * scale / level_scale;
   const double c = std::cos(orientation) * step, s = std::sin(orientation) * step;
   const int h = image.patch_size / 2;
   const int n = image.patch_size * image.patch_size;
   double sum = 0.0, sum2 = 0.0;
   int idx = 0;
-  for (int b = -h; b <= h; ++b) {
-    for (int a = -h; a <= h; ++a) {
-      const float v = Bilinear(level.smoothed, cx + c * a - s * b, cy + s * a + c * b);
-      out[idx++] = v;
-      sum += v;
-      sum2 += static_cast<double>(v) * v;
+  const cv::Mat& img = level.smoothed;
+  const double reach = (std::abs(c) + std::abs(s)) * h + 1.0;
+  if (cx - reach >= 0.0 && cy - reach >= 0.0 && cx + reach < img.cols - 1 &&
+      cy + reach < img.rows - 1) {
+    // Fast path: the whole patch is inside, no clamping.
+    const size_t stride = img.step1();
+    const float* base = img.ptr<float>();
+    for (int b = -h; b <= h; ++b) {
+      double x = cx - c * h - s * b, y = cy - s * h + c * b;
+      for (int a = -h; a <= h; ++a, x += c, y += s) {
+        const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+        const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+        const float* r0 = base + y0 * stride + x0;
+        const float* r1 = r0 + stride;
+        const float v =
+            (1.f - fy) * ((1.f - fx) * r0[0] + fx * r0[1]) + fy * ((1.f - fx) * r1[0] + fx * r1[1]);
+        out[idx++] = v;
+        sum += v;
+        sum2 += static_cast<double>(v) * v;
+      }
+    }
+  } else {
+    for (int b = -h; b <= h; ++b) {
+      for (int a = -h; a <= h; ++a) {
+        const float v = Bilinear(img, cx + c * a - s * b, cy + s * a + c * b);
+        out[idx++] = v;
+        sum += v;
+        sum2 += static_cast<double>(v) * v;
+      }
     }
   }
   const double mean = sum / n;
@@ -263,21 +292,44 @@ DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options) {
   result.patch_size = options.patch_size;
   result.patch_spacing = options.patch_spacing;
 
-  cv::Mat level_u8 = gray;
+  // Levels: cascaded area resizing by scale_factor; with the default sqrt(2), level l >= 2 is
+  // cv::pyrDown of level l - 2 instead (exact factor 2, ten times cheaper than INTER_AREA at a
+  // non-integer ratio).
+  const bool sqrt2 = std::abs(options.scale_factor * options.scale_factor - 2.0) < 1e-6;
+  std::vector<cv::Mat> levels_u8;
   for (int l = 0; l < options.num_levels; ++l) {
-    if (l > 0) {
-      const cv::Size size(static_cast<int>(std::lround(level_u8.cols / options.scale_factor)),
-                          static_cast<int>(std::lround(level_u8.rows / options.scale_factor)));
-      if (size.width < 4 * options.border || size.height < 4 * options.border) break;
-      cv::Mat next;
-      cv::resize(level_u8, next, size, 0, 0, cv::INTER_AREA);
-      level_u8 = next;
+    cv::Mat level_u8;
+    if (l == 0) {
+      level_u8 = gray;
+    } else if (sqrt2 && l >= 2) {
+      cv::pyrDown(levels_u8[l - 2], level_u8);
+    } else {
+      const cv::Mat& prev = levels_u8[l - 1];
+      const cv::Size size(static_cast<int>(std::lround(prev.cols / options.scale_factor)),
+                          static_cast<int>(std::lround(prev.rows / options.scale_factor)));
+      cv::resize(prev, level_u8, size, 0, 0, cv::INTER_AREA);
     }
+    if (level_u8.cols < 4 * options.border || level_u8.rows < 4 * options.border) break;
+    levels_u8.push_back(level_u8);
+    // Compose the level -> level-0 affine map. cv::resize (INTER_AREA) with ratio r maps pixel
+    // centres as u_src = r (u + 0.5) - 0.5; cv::pyrDown as u_src = 2 u (its kernel is centred on
+    // the even source pixels).
     PyramidLevel level;
-    level.scale_x = static_cast<double>(gray.cols) / level_u8.cols;
-    level.scale_y = static_cast<double>(gray.rows) / level_u8.rows;
-    level_u8.convertTo(level.smoothed, CV_32F);
-    cv::GaussianBlur(level.smoothed, level.smoothed, KernelSize(options.sigma_d), options.sigma_d,
+    if (l > 0) {
+      const bool pyr = sqrt2 && l >= 2;
+      const PyramidLevel& src = result.pyramid[pyr ? l - 2 : l - 1];
+      const cv::Mat& src_u8 = levels_u8[pyr ? l - 2 : l - 1];
+      const double rx = pyr ? 2.0 : static_cast<double>(src_u8.cols) / level_u8.cols;
+      const double ry = pyr ? 2.0 : static_cast<double>(src_u8.rows) / level_u8.rows;
+      const double bx = pyr ? 0.0 : 0.5 * rx - 0.5, by = pyr ? 0.0 : 0.5 * ry - 0.5;
+      level.scale_x = src.scale_x * rx;
+      level.scale_y = src.scale_y * ry;
+      level.offset_x = src.scale_x * bx + src.offset_x;
+      level.offset_y = src.scale_y * by + src.offset_y;
+    }
+    thread_local cv::Mat level_f32;  // Scratch (a filter in place would copy its source).
+    level_u8.convertTo(level_f32, CV_32F);
+    cv::GaussianBlur(level_f32, level.smoothed, KernelSize(options.sigma_d), options.sigma_d,
                      options.sigma_d, cv::BORDER_REFLECT_101);
     DetectLevel(level.smoothed, level, l, options, &result.points);
     result.pyramid.push_back(std::move(level));

@@ -24,9 +24,8 @@
 //
 // Thread safety: DetectHarris is re-entrant (it only reads its inputs).
 
-#include <opencv2/core.hpp>
-
 #include <Eigen/Core>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -34,32 +33,32 @@ namespace dala {
 
 struct InterestPoint {
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // Level-0 pixel coordinates (OpenCV centres).
-  float cornerness = 0.f;   // det M - k trace(M)^2 at the detection level.
-  float lambda1 = 0.f;      // Largest eigenvalue of M.
-  float lambda2 = 0.f;      // Smallest eigenvalue of M.
+  float cornerness = 0.f;                        // det M - k trace(M)^2 at the detection level.
+  float lambda1 = 0.f;                           // Largest eigenvalue of M.
+  float lambda2 = 0.f;                           // Smallest eigenvalue of M.
   float orientation = 0.f;  // Dominant gradient direction, radians in (-pi, pi], image axes.
   float scale = 1.f;        // Level-0 pixels per pixel of the detection level.
   int level = 0;            // Pyramid level of detection.
 };
 
 struct HarrisOptions {
-  double sigma_d = 1.0;            // Derivation scale (level pixels).
-  double sigma_i = 2.0;            // Integration scale of the auto-correlation matrix.
-  double k = 0.04;                 // Harris constant in det - k trace^2.
+  double sigma_d = 1.0;              // Derivation scale (level pixels).
+  double sigma_i = 2.0;              // Integration scale of the auto-correlation matrix.
+  double k = 0.04;                   // Harris constant in det - k trace^2.
   double relative_threshold = 1e-3;  // Keep R > relative_threshold * max R of the level.
   double min_cornerness = 1e-3;      // Absolute floor on R (grey levels 0..255: R ~ contrast^4).
   // Keep lambda2 / lambda1 >= min_eigen_ratio: Harris R > 0 already needs about k (0.04) here,
   // but points on curved edges just above it all look alike once rotation-normalised.
   double min_eigen_ratio = 0.1;
-  int num_levels = 4;              // Pyramid levels (1 = no pyramid).
+  int num_levels = 4;                // Pyramid levels (1 = no pyramid).
   double scale_factor = 1.41421356;  // Size ratio between consecutive levels (> 1).
-  int cell_size = 32;              // Bucketing cell side (level pixels); 0 disables bucketing.
-  int max_per_cell = 5;            // Strongest points kept per cell.
-  int max_points = 3000;           // Cap on the total number of points (strongest first).
-  int border = 8;                  // Points closer than this to the level border are dropped.
-  double sigma_orientation = 2.5;  // Gaussian window of the orientation estimate (level px).
-  int patch_size = 11;             // Side of the patch descriptor (odd), samples.
-  double patch_spacing = 1.5;      // Sample spacing in level pixels at the detection scale.
+  int cell_size = 32;                // Bucketing cell side (level pixels); 0 disables bucketing.
+  int max_per_cell = 5;              // Strongest points kept per cell.
+  int max_points = 3000;             // Cap on the total number of points (strongest first).
+  int border = 8;                    // Points closer than this to the level border are dropped.
+  double sigma_orientation = 2.5;    // Gaussian window of the orientation estimate (level px).
+  int patch_size = 11;               // Side of the patch descriptor (odd), samples.
+  double patch_spacing = 1.5;        // Sample spacing in level pixels at the detection scale.
 
   bool IsValid(std::string* why) const;
 };
@@ -67,7 +66,9 @@ struct HarrisOptions {
 // One pyramid level: what detection computed and the matcher reuses.
 struct PyramidLevel {
   cv::Mat smoothed;  // CV_32F, G(sigma_d) * I_l.
-  double scale_x = 1.0, scale_y = 1.0;  // Level-0 pixels per level pixel along x and y.
+  // Level pixel (u_l, v_l) is level-0 pixel (scale_x u_l + offset_x, scale_y v_l + offset_y).
+  double scale_x = 1.0, scale_y = 1.0;  // Level-0 pixels per level pixel.
+  double offset_x = 0.0, offset_y = 0.0;
 };
 
 // The detection result for one image, computed once and reused by every match involving it.

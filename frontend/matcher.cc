@@ -230,15 +230,15 @@ class Matcher {
     for (size_t j = 0; j < nb_; ++j) {
       for (const Candidate& c : from_b[j]) {
         auto& l = candidates_[c.j];
-        const bool present = std::any_of(l.begin(), l.end(), [&](const Candidate& x) {
-          return x.j == static_cast<int>(j);
-        });
+        const bool present = std::any_of(
+            l.begin(), l.end(), [&](const Candidate& x) { return x.j == static_cast<int>(j); });
         if (!present) l.push_back({static_cast<int>(j), c.score});
       }
     }
     num_candidates_ = 0;
     for (auto& l : candidates_) {
-      std::sort(l.begin(), l.end(), [](const Candidate& x, const Candidate& y) { return x.j < y.j; });
+      std::sort(l.begin(), l.end(),
+                [](const Candidate& x, const Candidate& y) { return x.j < y.j; });
       num_candidates_ += static_cast<int>(l.size());
     }
   }
@@ -287,7 +287,8 @@ class Matcher {
         best_q = qn.uv;
       }
       if (found) {
-        votes.push_back({d_a, best_q, std::arg(best_w), log_s0 + 0.5 * std::log(std::norm(best_w))});
+        votes.push_back(
+            {d_a, best_q, std::arg(best_w), log_s0 + 0.5 * std::log(std::norm(best_w))});
       }
     }
     if (static_cast<int>(votes.size()) < o_.min_support) return false;
@@ -358,10 +359,9 @@ class Matcher {
       queue.pop_front();
       const Eigen::Vector2d& p = a_.points[g.i].uv;
       const Eigen::Vector2d& q = b_.points[g.j].uv;
-      const Eigen::Matrix2d sR =
-          g.sigma * (Eigen::Matrix2d() << std::cos(g.phi), -std::sin(g.phi), std::sin(g.phi),
-                     std::cos(g.phi))
-                        .finished();
+      const Eigen::Matrix2d sR = g.sigma * (Eigen::Matrix2d() << std::cos(g.phi), -std::sin(g.phi),
+                                            std::sin(g.phi), std::cos(g.phi))
+                                               .finished();
       for (int nbr : neighbours_[g.i]) {
         if (used_a_[nbr]) continue;
         const InterestPoint& pn = a_.points[nbr];

@@ -51,17 +51,17 @@ enum class GeometricCheck { kNone, kEpipolarRectified, kFundamental, kHomography
 
 struct MatcherOptions {
   // Candidates.
-  double min_zncc = 0.8;             // ZNCC threshold for a candidate pair.
-  int top_k = 3;                     // Candidates kept per point (each way).
-  double max_scale_ratio = 2.5;      // Max ratio between the two points' detection scales.
-  double max_rotation = 3.2;         // Max |orientation difference| (rad); >= pi: any rotation.
+  double min_zncc = 0.8;                // ZNCC threshold for a candidate pair.
+  int top_k = 3;                        // Candidates kept per point (each way).
+  double max_scale_ratio = 2.5;         // Max ratio between the two points' detection scales.
+  double max_rotation = 3.2;            // Max |orientation difference| (rad); >= pi: any rotation.
   double max_eigen_ratio_change = 4.0;  // Max factor between the (lambda1/lambda2) of the pair.
   // Group confirmation.
-  int num_neighbours = 12;           // Spatial neighbours of p examined.
-  int min_support = 4;               // Neighbours agreeing with one local similarity.
-  double loose_angle = 0.5;          // (rad) first, loose agreement with the pair's own guess.
-  double loose_scale = 1.6;          // Factor, same.
-  double position_tolerance_px = 2.5;   // Final agreement: |q' - prediction| < px + rel*|q'-q|.
+  int num_neighbours = 12;             // Spatial neighbours of p examined.
+  int min_support = 4;                 // Neighbours agreeing with one local similarity.
+  double loose_angle = 0.5;            // (rad) first, loose agreement with the pair's own guess.
+  double loose_scale = 1.6;            // Factor, same.
+  double position_tolerance_px = 2.5;  // Final agreement: |q' - prediction| < px + rel*|q'-q|.
   double position_tolerance_rel = 0.1;
   // A match's detection scales must agree with its group's scale sigma:
   // |log(scale_q / scale_p) - log(sigma)| <= log(max_scale_mismatch). Points detected at scales
@@ -71,17 +71,17 @@ struct MatcherOptions {
   // Propagation.
   bool propagate = true;
   double propagation_min_zncc = 0.7;
-  double propagation_radius_px = 3.0;    // Search radius around a prediction: px + rel*|q'-q|.
+  double propagation_radius_px = 3.0;  // Search radius around a prediction: px + rel*|q'-q|.
   double propagation_radius_rel = 0.08;
   // Final geometric check.
   GeometricCheck geometric_check = GeometricCheck::kNone;
-  double epipolar_max_dv = 2.0;        // kEpipolarRectified: |v_a - v_b| bound (px).
-  double min_disparity = 0.0;          // kEpipolarRectified: u_a - u_b range (px).
+  double epipolar_max_dv = 2.0;  // kEpipolarRectified: |v_a - v_b| bound (px).
+  double min_disparity = 0.0;    // kEpipolarRectified: u_a - u_b range (px).
   double max_disparity = 1e9;
-  double ransac_threshold_px = 3.0;    // kFundamental (epipolar distance) / kHomography (reproj.)
+  double ransac_threshold_px = 3.0;  // kFundamental (epipolar distance) / kHomography (reproj.)
   double ransac_confidence = 0.999;
   int ransac_max_iterations = 2000;
-  uint64_t seed = 42;                  // Seeds cv::theRNG() before RANSAC.
+  uint64_t seed = 42;  // Seeds cv::theRNG() before RANSAC.
 
   bool IsValid(std::string* why) const;
 
@@ -112,10 +112,10 @@ struct MatchPrior {
 // Counts of each stage, for logs and benchmarks.
 struct MatchStats {
   int candidates = 0;
-  int confirmed = 0;         // After group confirmation and the one-to-one selection.
-  int propagated = 0;        // Added by propagation.
-  int after_check = 0;       // Final (after the geometric check).
-  bool check_failed = false; // The geometric model could not be estimated (too few matches).
+  int confirmed = 0;          // After group confirmation and the one-to-one selection.
+  int propagated = 0;         // Added by propagation.
+  int after_check = 0;        // Final (after the geometric check).
+  bool check_failed = false;  // The geometric model could not be estimated (too few matches).
 };
 
 // Matches the points of `a` to those of `b`. One-to-one, sorted by i. CHECK-fails on invalid

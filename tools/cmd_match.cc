@@ -193,8 +193,7 @@ int RunMatch(const std::vector<std::string>& args) {
   } else {
     std::cout << "points: " << da.points.size() << " in A, " << db.points.size() << " in B\n"
               << "matches: " << matches.size() << " (candidates " << stats.candidates
-              << ", confirmed " << stats.confirmed << ", propagated " << stats.propagated
-              << ")\n";
+              << ", confirmed " << stats.confirmed << ", propagated " << stats.propagated << ")\n";
     if (!H.empty()) {
       std::cout << "correct: " << num_correct << " (|H a - b| < " << FLAGS_match_correct_px
                 << " px)\nprecision: "

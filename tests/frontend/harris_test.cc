@@ -20,8 +20,8 @@ using testing::Warp;
 
 // Fraction of A's points whose image under H (inside B, away from the border) has a B point
 // within `tol` pixels.
-double Repeatability(const DetectedImage& a, const DetectedImage& b, const cv::Mat& H,
-                     double tol, int* considered) {
+double Repeatability(const DetectedImage& a, const DetectedImage& b, const cv::Mat& H, double tol,
+                     int* considered) {
   std::vector<Eigen::Vector2d> uv_b;
   for (const auto& p : b.points) uv_b.push_back(p.uv);
   SpatialGrid grid(uv_b, 16.0);
@@ -72,8 +72,8 @@ TEST(HarrisTest, FlatImageHasNoPoints) {
 
 // An X-junction (two opposite bright quadrants) centred at a sub-pixel position, rendered by
 // area averaging of a 16x supersampled image. By symmetry its Harris maximum is the centre.
-cv::Mat XJunction(double cx, double cy) {
-  const int s = 16, w = 64, h = 64;
+cv::Mat XJunction(double cx, double cy, int w = 64, int h = 64) {
+  const int s = 16;
   cv::Mat big(h * s, w * s, CV_8UC1);
   for (int y = 0; y < big.rows; ++y) {
     for (int x = 0; x < big.cols; ++x) {
@@ -107,6 +107,25 @@ TEST(HarrisTest, SubPixelAccuracyOnSyntheticCorner) {
   // Integer maxima alone would be off by up to 0.7 px; the quadratic fit leaves ~0.12 px per
   // axis (measured 0.174 px in norm), a bias towards pixel boundaries.
   EXPECT_LT(max_err, 0.2);
+}
+
+// An X-junction looks the same at every scale: each pyramid level must find it at the same
+// level-0 position, which checks the level -> level-0 coordinate maps (resize and pyrDown).
+TEST(HarrisTest, PyramidLevelsAgreeInLevelZeroCoordinates) {
+  const double cx = 80.3, cy = 75.6;
+  HarrisOptions o;
+  o.num_levels = 4;
+  o.border = 4;
+  const DetectedImage d = DetectHarris(XJunction(cx, cy, 160, 150), o);
+  ASSERT_EQ(d.pyramid.size(), 4u);
+  std::vector<bool> found(4, false);
+  for (const auto& p : d.points) {
+    if ((p.uv - Eigen::Vector2d(cx, cy)).norm() < 3.0) {
+      EXPECT_LT((p.uv - Eigen::Vector2d(cx, cy)).norm(), 0.25 * p.scale) << "level " << p.level;
+      found[p.level] = true;
+    }
+  }
+  for (int l = 0; l < 4; ++l) EXPECT_TRUE(found[l]) << "level " << l;
 }
 
 TEST(HarrisTest, AttributesAreConsistent) {
@@ -145,12 +164,12 @@ TEST(HarrisTest, BucketingSpreadsPoints) {
     std::vector<int> count((640 / 40) * (480 / 40), 0);
     for (const auto& p : d.points) {
       // Pixel x covers [x - 0.5, x + 0.5): the cell of a refined point is floor((u + 0.5) / 40).
-      ++count[static_cast<int>((p.uv.y() + 0.5) / 40) * 16 + static_cast<int>((p.uv.x() + 0.5) / 40)];
+      ++count[static_cast<int>((p.uv.y() + 0.5) / 40) * 16 +
+              static_cast<int>((p.uv.x() + 0.5) / 40)];
     }
     *max_count = *std::max_element(count.begin(), count.end());
-    *occupied = static_cast<int>(std::count_if(count.begin(), count.end(), [](int c) {
-      return c > 0;
-    }));
+    *occupied =
+        static_cast<int>(std::count_if(count.begin(), count.end(), [](int c) { return c > 0; }));
   };
   int max_count = 0, occupied = 0;
   count_cells(DetectHarris(img, o), &max_count, &occupied);
@@ -174,9 +193,12 @@ TEST(HarrisTest, Deterministic) {
 }
 
 TEST(HarrisTest, OrientationFollowsAnExactRotation) {
-  const cv::Mat img = MakeTexturedImage(480, 480, 13);
+  // 493 px: every level's sampling grid (area resize to 349 px, pyrDown to 247 and 175) maps
+  // onto itself under the rotation, so the pyramids of both images hold the same samples.
+  const int size = 493;
+  const cv::Mat img = MakeTexturedImage(size, size, 13);
   cv::Mat rotated;
-  cv::rotate(img, rotated, cv::ROTATE_90_CLOCKWISE);  // (x, y) -> (479 - y, x), no resampling.
+  cv::rotate(img, rotated, cv::ROTATE_90_CLOCKWISE);  // (x, y) -> (size-1 - y, x), exact.
   HarrisOptions o;
   const DetectedImage a = DetectHarris(img, o), b = DetectHarris(rotated, o);
   std::vector<Eigen::Vector2d> uv_b;
@@ -184,7 +206,7 @@ TEST(HarrisTest, OrientationFollowsAnExactRotation) {
   SpatialGrid grid(uv_b, 16.0);
   int n = 0, good = 0;
   for (const auto& p : a.points) {
-    const Eigen::Vector2d q(479.0 - p.uv.y(), p.uv.x());
+    const Eigen::Vector2d q(size - 1.0 - p.uv.y(), p.uv.x());
     for (int j : grid.InRadius(q, 0.3)) {
       if (b.points[j].level != p.level) continue;
       ++n;
@@ -205,9 +227,9 @@ TEST(HarrisTest, RepeatableUnderRotationAndScale) {
   struct Case {
     double angle_deg, scale, min_a_to_b, min_b_to_a;
   };
-  for (const Case& c : {Case{0.0, 1.0, 0.99, 0.99}, Case{30.0, 1.0, 0.77, 0.77},
-                        Case{90.0, 1.0, 0.78, 0.78}, Case{0.0, 1.5, 0.77, 0.67},
-                        Case{45.0, 2.0, 0.63, 0.55}}) {
+  for (const Case& c :
+       {Case{0.0, 1.0, 0.99, 0.99}, Case{30.0, 1.0, 0.77, 0.77}, Case{90.0, 1.0, 0.78, 0.78},
+        Case{0.0, 1.5, 0.77, 0.67}, Case{45.0, 2.0, 0.63, 0.55}}) {
     const cv::Mat H = SimilarityAboutCentre(img.size(), c.angle_deg * M_PI / 180.0, c.scale);
     const DetectedImage b = DetectHarris(Warp(img, H), o);
     int n = 0;
@@ -221,9 +243,9 @@ TEST(HarrisTest, RepeatableUnderRotationAndScale) {
 
 TEST(HarrisTest, KittiFrameGivesManyWellSpreadPoints) {
   DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
-  const cv::Mat img = cv::imread(
-      ::dala::testing::SharedDataDir() + "/kitti06_0000-0050/image_0/000000.png",
-      cv::IMREAD_GRAYSCALE);
+  const cv::Mat img =
+      cv::imread(::dala::testing::SharedDataDir() + "/kitti06_0000-0050/image_0/000000.png",
+                 cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(img.empty());
   const DetectedImage d = DetectHarris(img, HarrisOptions());
   EXPECT_GT(d.points.size(), 800u);

@@ -86,7 +86,7 @@ DetectedImage* MatcherSweepTest::a_ = nullptr;
 // Bounds on correct matches: ~75 % of what the matcher finds at writing (2012, 1485, 1394, 1282,
 // 1389, 1869 for the rotations; 1045, 713, 278 for the scales), so that a regression fails.
 TEST_F(MatcherSweepTest, RotationSweep) {
-  const std::pair<double, int> cases[] = {{0, 1500}, {30, 1110}, {60, 1040},
+  const std::pair<double, int> cases[] = {{0, 1500}, {30, 1110},  {60, 1040},
                                           {90, 960}, {135, 1040}, {180, 1400}};
   for (const auto& [deg, min_correct] : cases) {
     Check(SimilarityAboutCentre(image_->size(), deg * M_PI / 180.0, 1.0), min_correct,
@@ -103,7 +103,8 @@ TEST_F(MatcherSweepTest, ScaleSweep) {
 }
 
 TEST_F(MatcherSweepTest, RotationWithScale) {
-  Check(SimilarityAboutCentre(image_->size(), 2.3, 1.6), 450, "rotation 132 deg, scale 1.6");  // 602 at writing
+  Check(SimilarityAboutCentre(image_->size(), 2.3, 1.6), 450,
+        "rotation 132 deg, scale 1.6");  // 602 at writing
   // The inverse direction: B is A zoomed out.
   Check(SimilarityAboutCentre(image_->size(), -0.7, 1.0 / 1.5), 630,
         "rotation -40 deg, 1/1.5");  // 840 at writing
@@ -155,8 +156,8 @@ TEST(MatcherTest, PredictedPriorGuidesAndRestricts) {
   for (const Match& x : m) ASSERT_LE((b.points[x.j].uv - predicted[x.i]).norm(), 10.0);
   // Unknown predictions (NaN) allow nothing.
   const MatchPrior none = MatchPrior::Predicted(
-      std::vector<Eigen::Vector2d>(a.points.size(),
-                                   Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN())),
+      std::vector<Eigen::Vector2d>(
+          a.points.size(), Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN())),
       10.0);
   EXPECT_TRUE(MatchPoints(a, b, MatcherOptions::ForTracking(), &none).empty());
 }
@@ -172,8 +173,8 @@ TEST(MatcherTest, Deterministic) {
   const cv::Mat H = SimilarityAboutCentre(img.size(), 1.0, 1.3, 2e-4, 1e-4);
   const DetectedImage a = DetectHarris(img, HarrisOptions());
   const DetectedImage b = DetectHarris(Warp(img, H), HarrisOptions());
-  for (GeometricCheck check : {GeometricCheck::kNone, GeometricCheck::kHomography,
-                               GeometricCheck::kFundamental}) {
+  for (GeometricCheck check :
+       {GeometricCheck::kNone, GeometricCheck::kHomography, GeometricCheck::kFundamental}) {
     MatcherOptions o;
     o.geometric_check = check;
     const std::vector<Match> m1 = MatchPoints(a, b, o);
@@ -191,7 +192,8 @@ TEST(MatcherTest, Deterministic) {
 
 TEST(MatcherTest, EmptyInputsGiveEmptyResult) {
   const DetectedImage a = DetectHarris(MakeTexturedImage(320, 240, 2), HarrisOptions());
-  const DetectedImage flat = DetectHarris(cv::Mat(240, 320, CV_8UC1, cv::Scalar(7)), HarrisOptions());
+  const DetectedImage flat =
+      DetectHarris(cv::Mat(240, 320, CV_8UC1, cv::Scalar(7)), HarrisOptions());
   EXPECT_TRUE(MatchPoints(a, flat, MatcherOptions()).empty());
   EXPECT_TRUE(MatchPoints(flat, a, MatcherOptions()).empty());
 }
@@ -222,8 +224,8 @@ TEST(MatchGeometryTest, EpipolarAndRansacChecks) {
     InterestPoint p, q;
     p.uv = Eigen::Vector2d(20.0 + 37.0 * k, 10.0 + 23.0 * ((k * 7) % 11));
     q.uv = p.uv - Eigen::Vector2d(5.0, 0.0);
-    if (k == 3) q.uv += Eigen::Vector2d(0.0, 9.0);     // Off the epipolar line.
-    if (k == 8) q.uv += Eigen::Vector2d(60.0, 40.0);   // Wrong everywhere.
+    if (k == 3) q.uv += Eigen::Vector2d(0.0, 9.0);    // Off the epipolar line.
+    if (k == 8) q.uv += Eigen::Vector2d(60.0, 40.0);  // Wrong everywhere.
     a.points.push_back(p);
     b.points.push_back(q);
   }

@@ -6,11 +6,10 @@
 // slightly blurred, with additive noise. Rich in corners of many angles, not a checkerboard,
 // not noise.
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <Eigen/Core>
 #include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 namespace dala::testing {
@@ -41,10 +40,10 @@ inline cv::Mat MakeTexturedImage(int width, int height, uint32_t seed, double no
         }
         cv::fillPoly(img, std::vector<std::vector<cv::Point>>{poly}, grey, cv::LINE_AA);
       } else if (kind < 0.8) {  // Ellipse.
-        cv::ellipse(img, cv::Point(cvRound(c.x), cvRound(c.y)),
-                    cv::Size(cvRound(size * (0.2 + 0.5 * u(rng))),
-                             cvRound(size * (0.2 + 0.5 * u(rng)))),
-                    u(rng) * 180.0, 0, 360, grey, -1, cv::LINE_AA);
+        cv::ellipse(
+            img, cv::Point(cvRound(c.x), cvRound(c.y)),
+            cv::Size(cvRound(size * (0.2 + 0.5 * u(rng))), cvRound(size * (0.2 + 0.5 * u(rng)))),
+            u(rng) * 180.0, 0, 360, grey, -1, cv::LINE_AA);
       } else {  // Stroke.
         const double a = u(rng) * 2 * M_PI;
         const cv::Point p0(cvRound(c.x), cvRound(c.y));

@@ -1,5 +1,6 @@
 // `dala match` end to end: runs the CLI binary on a generated pair with a known homography.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -7,7 +8,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 #include "tests/frontend/test_images.h"
 #include "tests/test_util.h"
@@ -43,9 +43,9 @@ class CmdMatchTest : public ::testing::Test {
 
 TEST_F(CmdMatchTest, JsonReportsPrecisionAgainstTheHomography) {
   std::string out;
-  ASSERT_EQ(RunShell(Dala(dir_ / "a.png" + " " + dir_ / "b.png" + " --homography " + dir_ / "H.txt" +
-                     " --json --out " + dir_ / "m.png"),
-                &out),
+  ASSERT_EQ(RunShell(Dala(dir_ / "a.png" + " " + dir_ / "b.png" + " --homography " +
+                          dir_ / "H.txt" + " --json --out " + dir_ / "m.png"),
+                     &out),
             0)
       << out;
   const nlohmann::json j = nlohmann::json::parse(out);
@@ -61,9 +61,10 @@ TEST_F(CmdMatchTest, ClearErrors) {
   EXPECT_EQ(RunShell(Dala(dir_ / "a.png" + " " + dir_ / "missing.png"), &out), 2);
   EXPECT_NE(out.find("missing.png"), std::string::npos) << out;
   std::ofstream(dir_ / "bad.txt") << "1 2 3\n";
-  EXPECT_EQ(RunShell(Dala(dir_ / "a.png" + " " + dir_ / "b.png" + " --homography " + dir_ / "bad.txt"),
-                &out),
-            2);
+  EXPECT_EQ(
+      RunShell(Dala(dir_ / "a.png" + " " + dir_ / "b.png" + " --homography " + dir_ / "bad.txt"),
+               &out),
+      2);
   EXPECT_NE(out.find("9 numbers"), std::string::npos) << out;
   std::ofstream(dir_ / "notimage.png") << "hello";
   EXPECT_EQ(RunShell(Dala(dir_ / "a.png" + " " + dir_ / "notimage.png"), &out), 2);
