@@ -65,7 +65,8 @@ void SlidingWindowBa::SetLandmarkPosition(LandmarkId id, const Eigen::Vector3d& 
 
 bool SlidingWindowBa::IsConstant(size_t i) const {
   if (window_[i].fixed) return true;
-  return !options_.use_marginalization && static_cast<int>(i) < num_fixed_;
+  const bool prior_holds_gauge = options_.use_marginalization && options_.keep_prior;
+  return !prior_holds_gauge && static_cast<int>(i) < num_fixed_;
 }
 
 void SlidingWindowBa::AddKeyframe(const BaKeyframe& kf) {
@@ -167,9 +168,17 @@ void SlidingWindowBa::MarginalizeOldest() {
     return;
   }
   const auto counts = CountObservations();
+  std::set<LandmarkId> tracked;  // seen by the newest keyframe.
+  if (options_.landmark_exit == LandmarkExit::kDropTrackedObservations) {
+    for (const BaObservation& obs : window_.back().observations) tracked.insert(obs.landmark);
+  }
   std::set<LandmarkId> leaving;
   for (const BaObservation& obs : m.observations) {
-    if (IsActive(obs.landmark, counts)) leaving.insert(obs.landmark);
+    if (!IsActive(obs.landmark, counts)) continue;
+    if (tracked.count(obs.landmark) && counts.at(obs.landmark) - 1 >= options_.min_observations) {
+      continue;  // kept in the state; m's observation of it is dropped with m.
+    }
+    leaving.insert(obs.landmark);
   }
   std::map<KeyframeId, double*> block_of;
   for (KeyframeState& kf : window_) block_of[kf.id] = kf.x.data();
@@ -197,15 +206,20 @@ void SlidingWindowBa::MarginalizeOldest() {
   for (size_t i = 1; i < window_.size(); ++i) {
     if (!IsConstant(i)) input.kept_poses.push_back({window_[i].id, window_[i].x.data()});
   }
-  prior_ = Marginalize(input);
+  prior_ = options_.keep_prior ? Marginalize(input) : MarginalizationPrior();
 
   // The marginalised landmarks leave the state: their observations are consumed. Their last
   // estimate stays in landmarks_ as the initial value if they are observed again.
   window_.pop_front();
+  if (options_.landmark_exit == LandmarkExit::kMarginalizeAllKeepTracks) {
+    for (const BaObservation& obs : window_.back().observations) tracked.insert(obs.landmark);
+  }
   for (KeyframeState& kf : window_) {
     auto& obs = kf.observations;
     obs.erase(std::remove_if(obs.begin(), obs.end(),
-                             [&](const BaObservation& o) { return leaving.count(o.landmark) > 0; }),
+                             [&](const BaObservation& o) {
+                               return leaving.count(o.landmark) > 0 && !tracked.count(o.landmark);
+                             }),
               obs.end());
   }
 }

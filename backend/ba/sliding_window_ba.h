@@ -54,9 +54,30 @@ namespace dala {
 
 class SlidingWindowBa {
  public:
+  enum class LandmarkExit {
+    // Landmarks the newest keyframe still tracks stay in the state and only the leaving
+    // keyframe's observations of them are dropped (information lost, nothing counted twice);
+    // the others are marginalised with all their window observations (DSO/Basalt-like).
+    kDropTrackedObservations,
+    // Every landmark the leaving keyframe sees is marginalised with all its window
+    // observations; a track seen again restarts as a new variable (consistent, but the window
+    // can lose most of its landmarks at once).
+    kMarginalizeAll,
+    // As kMarginalizeAll for the prior, but the tracked landmarks stay in the state with their
+    // other observations (VINS-Mono-like): their information is counted twice (overconfident),
+    // but no track is cut.
+    kMarginalizeAllKeepTracks,
+  };
+
   struct Options {
     int window_size = 8;              // keyframes in the window (>= 2).
     bool use_marginalization = true;  // false: leaving keyframes are dropped (for comparison).
+    // What happens to the landmarks the leaving keyframe sees (see the class comment):
+    LandmarkExit landmark_exit = LandmarkExit::kMarginalizeAllKeepTracks;
+    // Ablation: false => the marginalisation runs (the same landmarks and observations leave
+    // the window) but the prior is discarded, and the oldest window keyframes are held constant
+    // for the gauge. Shows what the prior carries.
+    bool keep_prior = true;
     int num_fixed_keyframes = -1;     // gauge; -1 => 1 for stereo intrinsics, 2 for mono.
     RobustLoss loss = RobustLoss::kHuber;
     double loss_scale = 2.45;  // on the whitened residual norm; sqrt(5.991), chi2 95% mono.

@@ -24,6 +24,7 @@ struct BaSceneOptions {
   double turn_radius_m = 25.0;  // radius of the curve (yaw rate = step / radius).
   double pixel_noise = 0.5;     // sigma of u, v and u_r (px).
   bool stereo = true;
+  double max_depth_m = 40.0;   // points farther from a camera are not observed by it.
   unsigned seed = 1;
 };
 
@@ -75,7 +76,7 @@ inline BaScene MakeBaScene(const BaSceneOptions& o) {
       const Eigen::Vector3d q = T_w_c.inverse() * p_w;
       const double u = scene.K.fx * q.x() / q.z() + scene.K.cx;
       const double v = scene.K.fy * q.y() / q.z() + scene.K.cy;
-      if (q.z() > 1.0 && q.z() < 40.0 && u > 5 && u < scene.width - 5 && v > 5 &&
+      if (q.z() > 1.0 && q.z() < o.max_depth_m && u > 5 && u < scene.width - 5 && v > 5 &&
           v < scene.height - 5) {
         ++seen;
       }
@@ -92,7 +93,7 @@ inline BaScene MakeBaScene(const BaSceneOptions& o) {
       const Eigen::Vector3d q = T_c_w * scene.p_w_gt[j];
       const double u = scene.K.fx * q.x() / q.z() + scene.K.cx;
       const double v = scene.K.fy * q.y() / q.z() + scene.K.cy;
-      if (!(q.z() > 1.0 && q.z() < 40.0 && u > 5 && u < scene.width - 5 && v > 5 &&
+      if (!(q.z() > 1.0 && q.z() < o.max_depth_m && u > 5 && u < scene.width - 5 && v > 5 &&
             v < scene.height - 5)) {
         continue;
       }
