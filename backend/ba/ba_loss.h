@@ -3,10 +3,10 @@
 
 // Robust loss choice shared by the BA, pose-only and pose-graph options.
 
+#include <ceres/loss_function.h>
+
 #include <memory>
 #include <string>
-
-#include <ceres/loss_function.h>
 
 namespace dala {
 

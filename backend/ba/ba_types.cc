@@ -11,11 +11,13 @@ bool StereoIntrinsics::IsValid(std::string* why) const {
   };
   if (!(fx > 0.0) || !(fy > 0.0)) return fail("fx and fy must be > 0");
   if (!std::isfinite(cx) || !std::isfinite(cy)) return fail("cx and cy must be finite");
-  if (!(baseline >= 0.0) || !std::isfinite(baseline)) return fail("baseline must be >= 0 (0 = mono)");
+  if (!(baseline >= 0.0) || !std::isfinite(baseline))
+    return fail("baseline must be >= 0 (0 = mono)");
   return true;
 }
 
-std::optional<Eigen::Vector3d> TriangulateStereo(const StereoIntrinsics& K, const BaObservation& obs,
+std::optional<Eigen::Vector3d> TriangulateStereo(const StereoIntrinsics& K,
+                                                 const BaObservation& obs,
                                                  double min_disparity_px) {
   if (!K.is_stereo() || !obs.u_right) return std::nullopt;
   const double disparity = obs.uv.x() - *obs.u_right;

@@ -10,12 +10,11 @@
 // where b is the baseline (metres, > 0 for stereo, 0 for a monocular camera). Pixels follow the
 // OpenCV convention (centre of the top-left pixel is (0, 0)). Valid for z > 0.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/geometry.h"
 #include "core/types.h"
@@ -62,8 +61,8 @@ constexpr double kChi2Quantile95Dof3 = 7.815;  // stereo (u, v, u_r)
 
 // Point in the left camera from a stereo observation: z = fx b / (u - u_r). Returns nullopt when
 // the disparity is below min_disparity_px (point too far or behind) or the camera is mono.
-std::optional<Eigen::Vector3d> TriangulateStereo(const StereoIntrinsics& K, const BaObservation& obs,
-                                                 double min_disparity_px);
+std::optional<Eigen::Vector3d> TriangulateStereo(const StereoIntrinsics& K,
+                                                 const BaObservation& obs, double min_disparity_px);
 
 }  // namespace dala
 

@@ -1,14 +1,13 @@
 #include "backend/ba/marginalization.h"
 
-#include <cmath>
-#include <map>
-#include <memory>
-
 #include <ceres/dynamic_autodiff_cost_function.h>
 #include <glog/logging.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <cmath>
+#include <map>
+#include <memory>
 
 namespace dala {
 namespace {
@@ -181,9 +180,8 @@ MarginalizationPrior Marginalize(const MarginalizationInput& input) {
   Eigen::MatrixXd H_k = H_pp.bottomRightCorner(K, K);
   Eigen::VectorXd b_k = b_p.tail(K);
   if (num_marg_pose_cols > 0) {
-    const Eigen::MatrixXd H_mm_inv =
-        PseudoInverseSym(H_pp.topLeftCorner(num_marg_pose_cols, num_marg_pose_cols),
-                         input.eigenvalue_floor);
+    const Eigen::MatrixXd H_mm_inv = PseudoInverseSym(
+        H_pp.topLeftCorner(num_marg_pose_cols, num_marg_pose_cols), input.eigenvalue_floor);
     const Eigen::MatrixXd H_km = H_pp.bottomLeftCorner(K, num_marg_pose_cols);
     H_k.noalias() -= H_km * H_mm_inv * H_km.transpose();
     b_k.noalias() -= H_km * H_mm_inv * b_p.head(num_marg_pose_cols);

@@ -26,12 +26,11 @@
 // Constant parameter blocks (gauge-fixed keyframes) take part as constants: they get no
 // columns, so their information goes nowhere, which is what fixing them means.
 
-#include <vector>
-
 #include <ceres/cost_function.h>
 #include <ceres/loss_function.h>
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "backend/ba/pose_block.h"
 #include "core/types.h"
@@ -65,9 +64,9 @@ struct FactorRef {
 };
 
 struct MarginalizationInput {
-  std::vector<FactorRef> factors;                // every factor touching a marginalised state.
-  std::vector<double*> marginalized_poses;       // 7-vector pose blocks to remove.
-  std::vector<double*> marginalized_landmarks;   // 3-vector blocks to remove.
+  std::vector<FactorRef> factors;               // every factor touching a marginalised state.
+  std::vector<double*> marginalized_poses;      // 7-vector pose blocks to remove.
+  std::vector<double*> marginalized_landmarks;  // 3-vector blocks to remove.
   std::vector<std::pair<KeyframeId, double*>> kept_poses;  // variable pose blocks that stay.
   // Any other block met in a factor is a constant.
   double eigenvalue_floor = 1e-8;  // relative to the largest eigenvalue (and absolute 1e-12).

@@ -17,10 +17,10 @@
 // t_hat + R_hat rho = t_hat + dt, so [phi; rho] = A * [a; dt] with A = diag(2 R^T, R^T);
 // ManifoldToRightPerturbation returns A.
 
+#include <ceres/manifold.h>
+
 #include <array>
 #include <memory>
-
-#include <ceres/manifold.h>
 
 #include "core/geometry.h"
 

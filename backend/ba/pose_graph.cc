@@ -1,13 +1,12 @@
 #include "backend/ba/pose_graph.h"
 
-#include <chrono>
-
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 #include <glog/logging.h>
 
 #include <Eigen/Cholesky>
+#include <chrono>
 
 #include "backend/ba/pose_block.h"
 
@@ -94,8 +93,8 @@ std::map<KeyframeId, Pose> OptimizePoseGraph(const std::map<KeyframeId, Pose>& T
         << "pose-graph edge " << e.from << " -> " << e.to << " refers to an unknown keyframe";
     // Upper-triangular square root U with U^T U = information.
     Eigen::LLT<Matrix6d> llt(0.5 * (e.information + e.information.transpose()));
-    CHECK(llt.info() == Eigen::Success) << "edge " << e.from << " -> " << e.to
-                                        << ": information is not positive definite";
+    CHECK(llt.info() == Eigen::Success)
+        << "edge " << e.from << " -> " << e.to << ": information is not positive definite";
     const Matrix6d sqrt_info = llt.matrixU();
     problem.AddResidualBlock(RelativePoseError::Create(e.T_from_to, sqrt_info), loss.get(),
                              blocks.at(e.from).data(), blocks.at(e.to).data());

@@ -26,9 +26,9 @@
 namespace dala {
 
 struct PoseGraphEdge {
-  KeyframeId from;  // a
-  KeyframeId to;    // b
-  Pose T_from_to;   // measured T_a_b.
+  KeyframeId from;                              // a
+  KeyframeId to;                                // b
+  Pose T_from_to;                               // measured T_a_b.
   Matrix6d information = Matrix6d::Identity();  // [rotation; translation], symmetric PD.
   bool is_loop = false;                         // informational (reports).
 };

@@ -65,8 +65,8 @@ PoseOnlyResult EstimatePoseOnly(const StereoIntrinsics& K,
   auto loss = MakeLoss(options.loss, options.loss_scale);
 
   for (int round = 0;; ++round) {
-    result.num_inliers = static_cast<int>(std::count(result.inliers.begin(),
-                                                     result.inliers.end(), true));
+    result.num_inliers =
+        static_cast<int>(std::count(result.inliers.begin(), result.inliers.end(), true));
     if (result.num_inliers < options.min_inliers) {
       result.status = PoseOnlyStatus::kTooFewObservations;
       return result;
@@ -103,8 +103,8 @@ PoseOnlyResult EstimatePoseOnly(const StereoIntrinsics& K,
         if (!result.inliers[i]) continue;
         double depth = 0.0;
         const double e2 = WhitenedSquaredError(K, observations[i], x.data(), p_w[i].data(), &depth);
-        const double bound = ResidualDof(K, observations[i]) == 3 ? kChi2Quantile95Dof3
-                                                                  : kChi2Quantile95Dof2;
+        const double bound =
+            ResidualDof(K, observations[i]) == 3 ? kChi2Quantile95Dof3 : kChi2Quantile95Dof2;
         if (e2 > bound || depth < options.min_depth) {
           result.inliers[i] = false;
           ++removed;
@@ -131,8 +131,7 @@ PoseOnlyResult EstimatePoseOnly(const StereoIntrinsics& K,
       result.status = PoseOnlyStatus::kDegenerate;
       return result;
     }
-    const Matrix6d cov_manifold = es.eigenvectors() *
-                                  es.eigenvalues().cwiseInverse().asDiagonal() *
+    const Matrix6d cov_manifold = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
                                   es.eigenvectors().transpose();
     const Matrix6d A = ManifoldToRightPerturbation(result.T_w_c);
     result.covariance = A * cov_manifold * A.transpose();

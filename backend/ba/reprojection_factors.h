@@ -70,8 +70,7 @@ struct StereoReprojectionError {
     const T inv_z = T(1.0) / p_c.z();
     r[0] = (T(K_.fx) * p_c.x() * inv_z + T(K_.cx) - T(uv_.x())) * T(inv_sigma_);
     r[1] = (T(K_.fy) * p_c.y() * inv_z + T(K_.cy) - T(uv_.y())) * T(inv_sigma_);
-    r[2] = (T(K_.fx) * (p_c.x() - T(K_.baseline)) * inv_z + T(K_.cx) - T(u_right_)) *
-           T(inv_sigma_);
+    r[2] = (T(K_.fx) * (p_c.x() - T(K_.baseline)) * inv_z + T(K_.cx) - T(u_right_)) * T(inv_sigma_);
     return true;
   }
 

@@ -1,15 +1,14 @@
 #include "backend/ba/sliding_window_ba.h"
 
-#include <chrono>
-#include <cmath>
-#include <memory>
-#include <sstream>
-
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 #include <glog/logging.h>
 
 #include <Eigen/SVD>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
 
 #include "backend/ba/reprojection_factors.h"
 
@@ -44,9 +43,9 @@ std::string SlidingWindowBa::Summary::BriefReport() const {
   std::ostringstream os;
   os << "BA: " << num_keyframes << " keyframes, " << num_landmarks << " landmarks, "
      << num_residual_blocks << " residual blocks, " << num_solves << " solves, " << num_iterations
-     << " iterations, cost " << initial_cost << " -> " << final_cost << ", "
-     << num_outliers_removed << " outliers removed, " << num_landmarks_culled
-     << " landmarks culled, " << time_s * 1e3 << " ms" << (usable ? "" : " (NOT usable)");
+     << " iterations, cost " << initial_cost << " -> " << final_cost << ", " << num_outliers_removed
+     << " outliers removed, " << num_landmarks_culled << " landmarks culled, " << time_s * 1e3
+     << " ms" << (usable ? "" : " (NOT usable)");
   return os.str();
 }
 
@@ -55,8 +54,8 @@ SlidingWindowBa::SlidingWindowBa(const StereoIntrinsics& K, const Options& optio
   std::string why;
   CHECK(K_.IsValid(&why)) << "invalid StereoIntrinsics: " << why;
   CHECK(options_.IsValid(&why)) << "invalid SlidingWindowBa::Options: " << why;
-  num_fixed_ = options_.num_fixed_keyframes >= 0 ? options_.num_fixed_keyframes
-                                                 : (K_.is_stereo() ? 1 : 2);
+  num_fixed_ =
+      options_.num_fixed_keyframes >= 0 ? options_.num_fixed_keyframes : (K_.is_stereo() ? 1 : 2);
 }
 
 void SlidingWindowBa::SetLandmarkPosition(LandmarkId id, const Eigen::Vector3d& p_w) {
@@ -132,8 +131,8 @@ bool SlidingWindowBa::TriangulateMono(LandmarkId id, Eigen::Vector3d* p_w) const
   double max_angle = 0.0;
   for (size_t i = 0; i < bearings_w.size(); ++i) {
     for (size_t j = i + 1; j < bearings_w.size(); ++j) {
-      max_angle = std::max(max_angle, std::acos(std::clamp(bearings_w[i].dot(bearings_w[j]),
-                                                           -1.0, 1.0)));
+      max_angle =
+          std::max(max_angle, std::acos(std::clamp(bearings_w[i].dot(bearings_w[j]), -1.0, 1.0)));
     }
   }
   if (max_angle < options_.min_triangulation_parallax_deg * M_PI / 180.0) return false;
@@ -191,8 +190,8 @@ void SlidingWindowBa::MarginalizeOldest() {
     for (const BaObservation& obs : kf.observations) {
       if (!leaving.count(obs.landmark)) continue;
       costs.emplace_back(CreateReprojectionCost(K_, obs));
-      input.factors.push_back({costs.back().get(), loss.get(),
-                               {kf.x.data(), landmarks_.at(obs.landmark).data()}});
+      input.factors.push_back(
+          {costs.back().get(), loss.get(), {kf.x.data(), landmarks_.at(obs.landmark).data()}});
     }
   }
   if (!prior_.empty()) {
@@ -294,8 +293,7 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
           double depth = 0.0;
           const double e2 =
               WhitenedSquaredError(K_, o, kf.x.data(), landmarks_.at(o.landmark).data(), &depth);
-          const double bound =
-              ResidualDof(K_, o) == 3 ? kChi2Quantile95Dof3 : kChi2Quantile95Dof2;
+          const double bound = ResidualDof(K_, o) == 3 ? kChi2Quantile95Dof3 : kChi2Quantile95Dof2;
           return e2 > bound || depth < options_.min_depth;
         });
         removed += static_cast<int>(obs.end() - end);

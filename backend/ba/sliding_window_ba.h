@@ -78,17 +78,17 @@ class SlidingWindowBa {
     // the window) but the prior is discarded, and the oldest window keyframes are held constant
     // for the gauge. Shows what the prior carries.
     bool keep_prior = true;
-    int num_fixed_keyframes = -1;     // gauge; -1 => 1 for stereo intrinsics, 2 for mono.
+    int num_fixed_keyframes = -1;  // gauge; -1 => 1 for stereo intrinsics, 2 for mono.
     RobustLoss loss = RobustLoss::kHuber;
-    double loss_scale = 2.45;  // on the whitened residual norm; sqrt(5.991), chi2 95% mono.
-    int max_num_iterations = 10;             // per solve.
-    double max_solver_time_in_seconds = 0.2; // per solve.
+    double loss_scale = 2.45;     // on the whitened residual norm; sqrt(5.991), chi2 95% mono.
+    int max_num_iterations = 10;  // per solve.
+    double max_solver_time_in_seconds = 0.2;  // per solve.
     double function_tolerance = 1e-6;
-    int num_threads = 1;                     // > 1 may change the result in the last bits.
-    bool remove_outliers = true;  // chi-square 95% test after each solve, then re-solve.
-    int max_outlier_rounds = 2;   // re-solves after removing outliers.
-    int min_observations = 2;     // a landmark is optimised when seen by >= this many keyframes.
-    double min_disparity_px = 0.5;              // stereo triangulation of new landmarks.
+    int num_threads = 1;            // > 1 may change the result in the last bits.
+    bool remove_outliers = true;    // chi-square 95% test after each solve, then re-solve.
+    int max_outlier_rounds = 2;     // re-solves after removing outliers.
+    int min_observations = 2;       // a landmark is optimised when seen by >= this many keyframes.
+    double min_disparity_px = 0.5;  // stereo triangulation of new landmarks.
     double min_triangulation_parallax_deg = 1;  // mono triangulation of new landmarks.
     double min_depth = 0.05;  // metres; an observation of a point closer (or behind) is an outlier.
     double prior_eigenvalue_floor = 1e-8;  // relative; see marginalization.h.
@@ -97,13 +97,13 @@ class SlidingWindowBa {
   };
 
   struct Summary {
-    int num_solves = 0;       // 1 + re-solves after outlier removal.
-    int num_iterations = 0;   // over all solves.
+    int num_solves = 0;      // 1 + re-solves after outlier removal.
+    int num_iterations = 0;  // over all solves.
     double initial_cost = 0.0;
     double final_cost = 0.0;  // Ceres cost 0.5 sum rho(|r|^2) of the last solve.
     double time_s = 0.0;      // wall time of Optimize().
     int num_keyframes = 0;
-    int num_landmarks = 0;    // optimised in the last solve.
+    int num_landmarks = 0;  // optimised in the last solve.
     int num_residual_blocks = 0;
     int num_outliers_removed = 0;
     int num_landmarks_culled = 0;  // dropped because no observation remained.
@@ -131,17 +131,15 @@ class SlidingWindowBa {
   Summary Optimize();
 
   // Pose-only tracking of a frame against the landmarks currently optimised in the window.
-  PoseOnlyResult TrackFrame(const std::vector<BaObservation>& observations,
-                            const Pose& T_w_c_guess, const PoseOnlyOptions& options) const;
+  PoseOnlyResult TrackFrame(const std::vector<BaObservation>& observations, const Pose& T_w_c_guess,
+                            const PoseOnlyOptions& options) const;
 
   std::vector<KeyframeId> WindowKeyframes() const;
   std::optional<Pose> KeyframePose(KeyframeId id) const;
   std::optional<Eigen::Vector3d> LandmarkPosition(LandmarkId id) const;
   // Landmarks with a position that are currently in the window's map.
   std::map<LandmarkId, Eigen::Vector3d> Landmarks() const;
-  const std::vector<MarginalizedKeyframe>& marginalized_keyframes() const {
-    return marginalized_;
-  }
+  const std::vector<MarginalizedKeyframe>& marginalized_keyframes() const { return marginalized_; }
   const MarginalizationPrior& prior() const { return prior_; }
   const Options& options() const { return options_; }
 

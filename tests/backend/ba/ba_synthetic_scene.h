@@ -5,11 +5,10 @@
 // a gentle curve, random world points in a corridor around it, and noisy stereo or mono
 // projections of the visible points. Deterministic for a given seed.
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "backend/ba/ba_types.h"
 #include "core/geometry.h"
@@ -24,7 +23,7 @@ struct BaSceneOptions {
   double turn_radius_m = 25.0;  // radius of the curve (yaw rate = step / radius).
   double pixel_noise = 0.5;     // sigma of u, v and u_r (px).
   bool stereo = true;
-  double max_depth_m = 40.0;   // points farther from a camera are not observed by it.
+  double max_depth_m = 40.0;  // points farther from a camera are not observed by it.
   unsigned seed = 1;
 };
 
@@ -44,11 +43,10 @@ inline Pose SceneCameraPose(double s, double radius) {
   const double yaw = s / radius;
   const Eigen::Vector3d c(radius * (1.0 - std::cos(yaw)), 0.3 * std::sin(s / 4.0),
                           radius * std::sin(yaw));
-  const Eigen::Matrix3d R =
-      (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(0.03 * std::sin(s / 3.0), Eigen::Vector3d::UnitX()) *
-       Eigen::AngleAxisd(0.02 * std::cos(s / 5.0), Eigen::Vector3d::UnitZ()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(0.03 * std::sin(s / 3.0), Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(0.02 * std::cos(s / 5.0), Eigen::Vector3d::UnitZ()))
+                                .toRotationMatrix();
   return MakePose(R, c);
 }
 
@@ -126,7 +124,8 @@ inline double AlignedAte(const std::vector<Pose>& est, const std::vector<Pose>& 
     B.col(i) = gt[i].translation();
   }
   const Eigen::Matrix4d S = Eigen::umeyama(A, B, with_scale);
-  const Eigen::Matrix3Xd aligned = (S.topLeftCorner<3, 3>() * A).colwise() + S.topRightCorner<3, 1>();
+  const Eigen::Matrix3Xd aligned =
+      (S.topLeftCorner<3, 3>() * A).colwise() + S.topRightCorner<3, 1>();
   return std::sqrt((aligned - B).colwise().squaredNorm().mean());
 }
 

@@ -1,13 +1,12 @@
 #include "backend/ba/marginalization.h"
 
+#include <ceres/crs_matrix.h>
+#include <ceres/numeric_diff_cost_function.h>
+#include <ceres/problem.h>
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <random>
-
-#include <ceres/crs_matrix.h>
-#include <ceres/numeric_diff_cost_function.h>
-#include <ceres/problem.h>
 
 #include "backend/ba/reprojection_factors.h"
 #include "tests/backend/ba/ba_synthetic_scene.h"
@@ -59,7 +58,8 @@ TEST(MarginalizeTest, MatchesDenseSchurComplement) {
   const testing::BaScene scene = testing::MakeBaScene(scene_options);
   std::mt19937 rng(5);
   std::vector<PoseBlock> x;
-  for (const Pose& T : scene.T_w_c_gt) x.push_back(PoseToBlock(testing::PerturbPose(T, rng, 0.01, 0.05)));
+  for (const Pose& T : scene.T_w_c_gt)
+    x.push_back(PoseToBlock(testing::PerturbPose(T, rng, 0.01, 0.05)));
   std::vector<Eigen::Vector3d> p = scene.p_w_gt;
   for (auto& v : p) v += 0.05 * Eigen::Vector3d::Random();
 
@@ -126,7 +126,8 @@ TEST(MarginalizeTest, MatchesDenseSchurComplement) {
   // The prior cost function evaluates to r0 at x_lin and its Jacobian (times PlusJacobian) is S.
   std::unique_ptr<ceres::CostFunction> prior_cost(CreatePriorCost(prior));
   double* blocks[2] = {x[2].data(), x[3].data()};
-  Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J0(prior.rank(), 7), J1(prior.rank(), 7);
+  Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J0(prior.rank(), 7),
+      J1(prior.rank(), 7);
   double* jacs[2] = {J0.data(), J1.data()};
   Eigen::VectorXd r(prior.rank());
   ASSERT_TRUE(prior_cost->Evaluate(blocks, r.data(), jacs));

@@ -16,9 +16,9 @@ TEST(PoseGraphTest, LoopClosureRemovesMostOfTheDrift) {
   std::vector<Pose> gt;
   for (int i = 0; i < n; ++i) {
     const double a = 2.0 * M_PI * i / n;
-    gt.push_back(MakePose(Eigen::Matrix3d(Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY())),
-                          Eigen::Vector3d(10.0 * std::sin(a), 0.2 * std::sin(3 * a),
-                                          10.0 * std::cos(a))));
+    gt.push_back(
+        MakePose(Eigen::Matrix3d(Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY())),
+                 Eigen::Vector3d(10.0 * std::sin(a), 0.2 * std::sin(3 * a), 10.0 * std::cos(a))));
   }
   std::mt19937 rng(4);
   std::normal_distribution<double> nd(0.0, 1.0);
@@ -72,8 +72,8 @@ TEST(PoseGraphTest, ConsistentEdgesAreAFixedPoint) {
 
 TEST(PoseGraphDeathTest, EdgeToUnknownKeyframeDies) {
   std::map<KeyframeId, Pose> poses{{KeyframeId(0), Pose::Identity()}};
-  std::vector<PoseGraphEdge> edges{{KeyframeId(0), KeyframeId(7), Pose::Identity(),
-                                    Matrix6d::Identity(), false}};
+  std::vector<PoseGraphEdge> edges{
+      {KeyframeId(0), KeyframeId(7), Pose::Identity(), Matrix6d::Identity(), false}};
   EXPECT_DEATH(OptimizePoseGraph(poses, edges, PoseGraphOptions()), "unknown keyframe");
 }
 

@@ -59,9 +59,9 @@ TEST(PoseOnlyTest, CovarianceIsConsistent) {
     const BaScene scene = MakeBaScene(so);
     std::mt19937 rng(t);
     const Pose& gt = scene.T_w_c_gt[2];
-    const PoseOnlyResult res = EstimatePoseOnly(scene.K, scene.keyframes[2].observations,
-                                                LookupIn(scene), PerturbPose(gt, rng, 0.01, 0.1),
-                                                options);
+    const PoseOnlyResult res =
+        EstimatePoseOnly(scene.K, scene.keyframes[2].observations, LookupIn(scene),
+                         PerturbPose(gt, rng, 0.01, 0.1), options);
     ASSERT_EQ(res.status, PoseOnlyStatus::kOk);
     const Vector6d xi = LogSE3(res.T_w_c.inverse() * gt);
     nees_sum += xi.dot(res.covariance.ldlt().solve(xi));
@@ -84,9 +84,8 @@ TEST(PoseOnlyTest, RejectsOutliersAndIgnoresUnknownLandmarks) {
   unknown.landmark = LandmarkId(1000000);
   obs.push_back(unknown);
   const Pose& gt = scene.T_w_c_gt[1];
-  const PoseOnlyResult res =
-      EstimatePoseOnly(scene.K, obs, LookupIn(scene), PerturbPose(gt, rng, 0.01, 0.1),
-                       PoseOnlyOptions());
+  const PoseOnlyResult res = EstimatePoseOnly(scene.K, obs, LookupIn(scene),
+                                              PerturbPose(gt, rng, 0.01, 0.1), PoseOnlyOptions());
   ASSERT_EQ(res.status, PoseOnlyStatus::kOk);
   EXPECT_GE(res.num_outliers_removed, injected);
   EXPECT_FALSE(res.inliers.back());

@@ -1,11 +1,10 @@
 #include "backend/ba/reprojection_factors.h"
 
+#include <ceres/numeric_diff_cost_function.h>
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <random>
-
-#include <ceres/numeric_diff_cost_function.h>
 
 #include "backend/ba/pose_block.h"
 #include "tests/test_util.h"
@@ -49,13 +48,13 @@ TEST(ReprojectionFactorsTest, AutodiffMatchesNumericDiffAndResidualIsZeroAtTruth
       std::unique_ptr<ceres::CostFunction> autodiff(CreateReprojectionCost(kK, o));
       std::unique_ptr<ceres::CostFunction> numeric;
       if (stereo) {
-        numeric.reset(new ceres::NumericDiffCostFunction<StereoReprojectionError, ceres::CENTRAL,
-                                                         3, 7, 3>(
-            new StereoReprojectionError(kK, o.uv, *o.u_right, o.sigma_px)));
+        numeric.reset(
+            new ceres::NumericDiffCostFunction<StereoReprojectionError, ceres::CENTRAL, 3, 7, 3>(
+                new StereoReprojectionError(kK, o.uv, *o.u_right, o.sigma_px)));
       } else {
-        numeric.reset(new ceres::NumericDiffCostFunction<MonoReprojectionError, ceres::CENTRAL, 2,
-                                                         7, 3>(
-            new MonoReprojectionError(kK, o.uv, o.sigma_px)));
+        numeric.reset(
+            new ceres::NumericDiffCostFunction<MonoReprojectionError, ceres::CENTRAL, 2, 7, 3>(
+                new MonoReprojectionError(kK, o.uv, o.sigma_px)));
       }
       EXPECT_EQ(autodiff->num_residuals(), stereo ? 3 : 2);
       Eigen::VectorXd ra, rn;
