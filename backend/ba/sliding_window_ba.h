@@ -16,13 +16,15 @@
 // and the marginalisation prior on the window poses.
 //
 // Marginalisation (when AddKeyframe finds the window full): the oldest keyframe m leaves, and
-// with it every optimised landmark m observes (the "anchored" scheme of VINS/Basalt: a landmark's
-// observations in the other window keyframes are marginalised together, so the prior lives on
-// poses only and stays small: <= 6 (N-1) dimensions). The factors marginalised are all
-// observations of those landmarks plus the previous prior. A marginalised landmark seen again
-// later comes back as a NEW state variable initialised at its last estimate, with no prior on it:
-// this loses the link between old and new observations but never counts information twice.
-//
+// with it the optimised landmarks m observes (the "anchored" scheme of VINS/DSO/Basalt: a
+// landmark's observations in the other window keyframes are marginalised together, so the prior
+// lives on poses only and stays small: <= 6 (N-1) dimensions). The factors marginalised are all
+// observations of those landmarks plus the previous prior. Options::landmark_exit says what
+// happens to the landmarks the newest keyframe still tracks (default: they are marginalised into
+// the prior AND stay in the state with their other observations, as VINS-Mono does; those
+// observations then count twice). A landmark that left the state and is seen again comes back
+// as a new variable initialised at its last estimate. docs/backend.md compares the choices.
+
 // Gauge: the first num_fixed_keyframes keyframes ever added are held constant (default: 1 for a
 // stereo camera, 2 for a mono one, which also fixes the scale by their distance). Their
 // information passes into the prior relative to these constants, so the prior carries the gauge
