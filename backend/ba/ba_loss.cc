@@ -1,0 +1,29 @@
+#include "backend/ba/ba_loss.h"
+
+namespace dala {
+
+std::unique_ptr<ceres::LossFunction> MakeLoss(RobustLoss loss, double scale) {
+  switch (loss) {
+    case RobustLoss::kHuber:
+      return std::make_unique<ceres::HuberLoss>(scale);
+    case RobustLoss::kCauchy:
+      return std::make_unique<ceres::CauchyLoss>(scale);
+    case RobustLoss::kNone:
+      break;
+  }
+  return nullptr;
+}
+
+const char* RobustLossName(RobustLoss loss) {
+  switch (loss) {
+    case RobustLoss::kHuber:
+      return "huber";
+    case RobustLoss::kCauchy:
+      return "cauchy";
+    case RobustLoss::kNone:
+      break;
+  }
+  return "none";
+}
+
+}  // namespace dala

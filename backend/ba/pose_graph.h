@@ -1,0 +1,64 @@
+#ifndef DALA_BACKEND_BA_POSE_GRAPH_H_
+#define DALA_BACKEND_BA_POSE_GRAPH_H_
+
+// SE(3) pose graph over keyframe poses: relative-pose edges between consecutive keyframes
+// (odometry, e.g. from the window BA) and loop-closure edges, solved with Ceres.
+//
+// Edge residual for a measurement T_a_b_meas between keyframes a and b (poses T_w_a, T_w_b):
+//   T_err = T_a_b_meas^-1 * (T_w_a^-1 * T_w_b),   e = [2 vec(q_err); t_err]   (6, [rot; trans])
+//   r = sqrt_info * e,   sqrt_info^T sqrt_info = information (6x6, [rotation; translation]).
+// e equals Log(T_err) = [phi; rho] to first order, i.e. the right-perturbation error of the
+// measurement in the frame b, so `information` is the inverse covariance of T_a_b_meas in
+// dala's convention (core/geometry.h). Poses live on the product manifold of
+// backend/ba/pose_block.h. The gauge: the pose of the first keyframe (smallest id) is constant.
+//
+// The caller moves each landmark with its anchor keyframe after the correction:
+//   p_w_new = T_w_a_new * T_w_a_old^-1 * p_w_old.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "backend/ba/ba_loss.h"
+#include "core/geometry.h"
+#include "core/types.h"
+
+namespace dala {
+
+struct PoseGraphEdge {
+  KeyframeId from;                              // a
+  KeyframeId to;                                // b
+  Pose T_from_to;                               // measured T_a_b.
+  Matrix6d information = Matrix6d::Identity();  // [rotation; translation], symmetric PD.
+  bool is_loop = false;                         // informational (reports).
+};
+
+struct PoseGraphOptions {
+  int max_num_iterations = 100;
+  double max_solver_time_in_seconds = 5.0;
+  RobustLoss loss = RobustLoss::kNone;  // Huber/Cauchy on the whitened edge error if wanted.
+  double loss_scale = 3.5;              // on |r|; sqrt(chi2_6 95%) = 3.55.
+  int num_threads = 1;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct PoseGraphSummary {
+  bool usable = false;
+  int num_iterations = 0;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  double time_s = 0.0;
+};
+
+// Optimises the poses; edges referring to unknown keyframes are a broken invariant (CHECK).
+// Returns the corrected poses of every keyframe of `T_w_kf` (unchanged if the solve fails, and
+// summary->usable = false).
+std::map<KeyframeId, Pose> OptimizePoseGraph(const std::map<KeyframeId, Pose>& T_w_kf,
+                                             const std::vector<PoseGraphEdge>& edges,
+                                             const PoseGraphOptions& options,
+                                             PoseGraphSummary* summary = nullptr);
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_BA_POSE_GRAPH_H_

@@ -1,0 +1,355 @@
+#include "backend/ba/sliding_window_ba.h"
+
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+#include <glog/logging.h>
+
+#include <Eigen/SVD>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "backend/ba/reprojection_factors.h"
+
+namespace dala {
+
+bool SlidingWindowBa::Options::IsValid(std::string* why) const {
+  auto fail = [&](const char* msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (window_size < 2) return fail("window_size must be >= 2");
+  if (num_fixed_keyframes < -1) return fail("num_fixed_keyframes must be >= 0 (or -1 = auto)");
+  if (!(loss_scale > 0.0)) return fail("loss_scale must be > 0");
+  if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
+  if (!(max_solver_time_in_seconds > 0.0)) return fail("max_solver_time_in_seconds must be > 0");
+  if (!(function_tolerance > 0.0)) return fail("function_tolerance must be > 0");
+  if (num_threads < 1) return fail("num_threads must be >= 1");
+  if (max_outlier_rounds < 0) return fail("max_outlier_rounds must be >= 0");
+  if (min_observations < 1) return fail("min_observations must be >= 1");
+  if (!(min_disparity_px > 0.0)) return fail("min_disparity_px must be > 0");
+  if (!(min_triangulation_parallax_deg > 0.0)) {
+    return fail("min_triangulation_parallax_deg must be > 0");
+  }
+  if (!(min_depth > 0.0)) return fail("min_depth must be > 0");
+  if (!(prior_eigenvalue_floor > 0.0 && prior_eigenvalue_floor < 1.0)) {
+    return fail("prior_eigenvalue_floor must be in (0, 1)");
+  }
+  return true;
+}
+
+std::string SlidingWindowBa::Summary::BriefReport() const {
+  std::ostringstream os;
+  os << "BA: " << num_keyframes << " keyframes, " << num_landmarks << " landmarks, "
+     << num_residual_blocks << " residual blocks, " << num_solves << " solves, " << num_iterations
+     << " iterations, cost " << initial_cost << " -> " << final_cost << ", " << num_outliers_removed
+     << " outliers removed, " << num_landmarks_culled << " landmarks culled, " << time_s * 1e3
+     << " ms" << (usable ? "" : " (NOT usable)");
+  return os.str();
+}
+
+SlidingWindowBa::SlidingWindowBa(const StereoIntrinsics& K, const Options& options)
+    : K_(K), options_(options) {
+  std::string why;
+  CHECK(K_.IsValid(&why)) << "invalid StereoIntrinsics: " << why;
+  CHECK(options_.IsValid(&why)) << "invalid SlidingWindowBa::Options: " << why;
+  num_fixed_ =
+      options_.num_fixed_keyframes >= 0 ? options_.num_fixed_keyframes : (K_.is_stereo() ? 1 : 2);
+}
+
+void SlidingWindowBa::SetLandmarkPosition(LandmarkId id, const Eigen::Vector3d& p_w) {
+  landmarks_[id] = p_w;
+}
+
+bool SlidingWindowBa::IsConstant(size_t i) const {
+  if (window_[i].fixed) return true;
+  const bool prior_holds_gauge = options_.use_marginalization && options_.keep_prior;
+  return !prior_holds_gauge && static_cast<int>(i) < num_fixed_;
+}
+
+void SlidingWindowBa::AddKeyframe(const BaKeyframe& kf) {
+  CHECK(window_.empty() || window_.back().id < kf.id)
+      << "keyframe ids must increase: " << kf.id << " after " << window_.back().id;
+  if (static_cast<int>(window_.size()) >= options_.window_size) MarginalizeOldest();
+  KeyframeState state;
+  state.id = kf.id;
+  state.t_ns = kf.t_ns;
+  state.x = PoseToBlock(kf.T_w_c);
+  state.fixed = num_added_ < num_fixed_;
+  state.observations = kf.observations;
+  ++num_added_;
+  window_.push_back(std::move(state));
+  InitializeStereoLandmarks(window_.back());
+}
+
+void SlidingWindowBa::InitializeStereoLandmarks(const KeyframeState& kf) {
+  const Pose T_w_c = BlockToPose(kf.x);
+  for (const BaObservation& obs : kf.observations) {
+    if (landmarks_.count(obs.landmark)) continue;
+    if (auto p_c = TriangulateStereo(K_, obs, options_.min_disparity_px)) {
+      landmarks_[obs.landmark] = T_w_c * *p_c;
+    }
+  }
+}
+
+std::map<LandmarkId, int> SlidingWindowBa::CountObservations() const {
+  std::map<LandmarkId, int> counts;
+  for (const KeyframeState& kf : window_) {
+    for (const BaObservation& obs : kf.observations) ++counts[obs.landmark];
+  }
+  return counts;
+}
+
+bool SlidingWindowBa::IsActive(LandmarkId id, const std::map<LandmarkId, int>& counts) const {
+  const auto it = counts.find(id);
+  return it != counts.end() && it->second >= options_.min_observations && landmarks_.count(id);
+}
+
+bool SlidingWindowBa::TriangulateMono(LandmarkId id, Eigen::Vector3d* p_w) const {
+  // Linear triangulation: each view gives x_n (P_3 X) - P_1 X = 0, y_n (P_3 X) - P_2 X = 0 with
+  // P = [R_w_c^T | -R_w_c^T t_w_c] and (x_n, y_n) the normalised coordinates.
+  std::vector<Eigen::Matrix<double, 2, 4>> rows;
+  std::vector<Eigen::Vector3d> bearings_w;
+  std::vector<Pose> poses;
+  for (const KeyframeState& kf : window_) {
+    for (const BaObservation& obs : kf.observations) {
+      if (obs.landmark != id) continue;
+      const Pose T_w_c = BlockToPose(kf.x);
+      const Pose T_c_w = T_w_c.inverse();
+      const Eigen::Vector3d f((obs.uv.x() - K_.cx) / K_.fx, (obs.uv.y() - K_.cy) / K_.fy, 1.0);
+      const Eigen::Matrix<double, 3, 4> P = T_c_w.matrix().topRows<3>();
+      Eigen::Matrix<double, 2, 4> A;
+      A.row(0) = f.x() * P.row(2) - P.row(0);
+      A.row(1) = f.y() * P.row(2) - P.row(1);
+      rows.push_back(A);
+      bearings_w.push_back(T_w_c.rotation() * f.normalized());
+      poses.push_back(T_w_c);
+    }
+  }
+  if (rows.size() < 2) return false;
+  double max_angle = 0.0;
+  for (size_t i = 0; i < bearings_w.size(); ++i) {
+    for (size_t j = i + 1; j < bearings_w.size(); ++j) {
+      max_angle =
+          std::max(max_angle, std::acos(std::clamp(bearings_w[i].dot(bearings_w[j]), -1.0, 1.0)));
+    }
+  }
+  if (max_angle < options_.min_triangulation_parallax_deg * M_PI / 180.0) return false;
+  Eigen::MatrixXd A(2 * rows.size(), 4);
+  for (size_t i = 0; i < rows.size(); ++i) A.middleRows<2>(2 * i) = rows[i];
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d X = svd.matrixV().col(3);
+  if (std::abs(X[3]) < 1e-12) return false;
+  const Eigen::Vector3d p = X.head<3>() / X[3];
+  for (const Pose& T_w_c : poses) {
+    if ((T_w_c.inverse() * p).z() < options_.min_depth) return false;
+  }
+  *p_w = p;
+  return true;
+}
+
+void SlidingWindowBa::InitializeMonoLandmarks() {
+  const auto counts = CountObservations();
+  for (const auto& [id, n] : counts) {
+    if (n < 2 || landmarks_.count(id)) continue;
+    Eigen::Vector3d p_w;
+    if (TriangulateMono(id, &p_w)) landmarks_[id] = p_w;
+  }
+}
+
+void SlidingWindowBa::MarginalizeOldest() {
+  CHECK(!window_.empty());
+  KeyframeState& m = window_.front();
+  marginalized_.push_back({m.id, m.t_ns, BlockToPose(m.x)});
+  if (!options_.use_marginalization) {
+    window_.pop_front();
+    return;
+  }
+  const auto counts = CountObservations();
+  std::set<LandmarkId> tracked;  // seen by the newest keyframe.
+  if (options_.landmark_exit == LandmarkExit::kDropTrackedObservations) {
+    for (const BaObservation& obs : window_.back().observations) tracked.insert(obs.landmark);
+  }
+  std::set<LandmarkId> leaving;
+  for (const BaObservation& obs : m.observations) {
+    if (!IsActive(obs.landmark, counts)) continue;
+    if (tracked.count(obs.landmark) && counts.at(obs.landmark) - 1 >= options_.min_observations) {
+      continue;  // kept in the state; m's observation of it is dropped with m.
+    }
+    leaving.insert(obs.landmark);
+  }
+  std::map<KeyframeId, double*> block_of;
+  for (KeyframeState& kf : window_) block_of[kf.id] = kf.x.data();
+
+  auto loss = MakeLoss(options_.loss, options_.loss_scale);
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  MarginalizationInput input;
+  input.eigenvalue_floor = options_.prior_eigenvalue_floor;
+  for (KeyframeState& kf : window_) {
+    for (const BaObservation& obs : kf.observations) {
+      if (!leaving.count(obs.landmark)) continue;
+      costs.emplace_back(CreateReprojectionCost(K_, obs));
+      input.factors.push_back(
+          {costs.back().get(), loss.get(), {kf.x.data(), landmarks_.at(obs.landmark).data()}});
+    }
+  }
+  if (!prior_.empty()) {
+    costs.emplace_back(CreatePriorCost(prior_));
+    FactorRef f{costs.back().get(), nullptr, {}};
+    for (KeyframeId id : prior_.keyframes) f.blocks.push_back(block_of.at(id));
+    input.factors.push_back(f);
+  }
+  if (!IsConstant(0)) input.marginalized_poses.push_back(m.x.data());
+  for (LandmarkId id : leaving) input.marginalized_landmarks.push_back(landmarks_.at(id).data());
+  for (size_t i = 1; i < window_.size(); ++i) {
+    if (!IsConstant(i)) input.kept_poses.push_back({window_[i].id, window_[i].x.data()});
+  }
+  prior_ = options_.keep_prior ? Marginalize(input) : MarginalizationPrior();
+
+  // The marginalised landmarks leave the state: their observations are consumed. Their last
+  // estimate stays in landmarks_ as the initial value if they are observed again.
+  window_.pop_front();
+  if (options_.landmark_exit == LandmarkExit::kMarginalizeAllKeepTracks) {
+    for (const BaObservation& obs : window_.back().observations) tracked.insert(obs.landmark);
+  }
+  for (KeyframeState& kf : window_) {
+    auto& obs = kf.observations;
+    obs.erase(std::remove_if(obs.begin(), obs.end(),
+                             [&](const BaObservation& o) {
+                               return leaving.count(o.landmark) > 0 && !tracked.count(o.landmark);
+                             }),
+              obs.end());
+  }
+}
+
+SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
+  const auto t0 = std::chrono::steady_clock::now();
+  Summary summary;
+  summary.num_keyframes = static_cast<int>(window_.size());
+  if (window_.empty()) return summary;
+  InitializeMonoLandmarks();
+
+  auto manifold = MakePoseManifold();
+  auto loss = MakeLoss(options_.loss, options_.loss_scale);
+  std::map<KeyframeId, double*> block_of;
+  for (KeyframeState& kf : window_) block_of[kf.id] = kf.x.data();
+
+  std::set<LandmarkId> active_before;
+  for (int round = 0;; ++round) {
+    const auto counts = CountObservations();
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    for (size_t i = 0; i < window_.size(); ++i) {
+      problem.AddParameterBlock(window_[i].x.data(), 7, manifold.get());
+      if (IsConstant(i)) problem.SetParameterBlockConstant(window_[i].x.data());
+    }
+    std::set<LandmarkId> active;
+    for (KeyframeState& kf : window_) {
+      for (const BaObservation& obs : kf.observations) {
+        if (!IsActive(obs.landmark, counts)) continue;
+        active.insert(obs.landmark);
+        problem.AddResidualBlock(CreateReprojectionCost(K_, obs), loss.get(), kf.x.data(),
+                                 landmarks_.at(obs.landmark).data());
+      }
+    }
+    if (round == 0) active_before = active;
+    if (!prior_.empty()) {
+      std::vector<double*> blocks;
+      for (KeyframeId id : prior_.keyframes) blocks.push_back(block_of.at(id));
+      problem.AddResidualBlock(CreatePriorCost(prior_), nullptr, blocks);
+    }
+    summary.num_landmarks = static_cast<int>(active.size());
+    summary.num_residual_blocks = problem.NumResidualBlocks();
+    if (problem.NumResidualBlocks() == 0) {
+      summary.usable = true;  // nothing to estimate yet: the state is trivially optimal.
+      break;
+    }
+
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+    solver_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+    solver_options.max_num_iterations = options_.max_num_iterations;
+    solver_options.max_solver_time_in_seconds = options_.max_solver_time_in_seconds;
+    solver_options.function_tolerance = options_.function_tolerance;
+    solver_options.num_threads = options_.num_threads;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary ceres_summary;
+    ceres::Solve(solver_options, &problem, &ceres_summary);
+    ++summary.num_solves;
+    summary.num_iterations += static_cast<int>(ceres_summary.iterations.size());
+    if (round == 0) summary.initial_cost = ceres_summary.initial_cost;
+    summary.final_cost = ceres_summary.final_cost;
+    summary.usable = ceres_summary.IsSolutionUsable();
+
+    int removed = 0;
+    if (options_.remove_outliers && summary.usable) {
+      for (KeyframeState& kf : window_) {
+        auto& obs = kf.observations;
+        const auto end = std::remove_if(obs.begin(), obs.end(), [&](const BaObservation& o) {
+          if (!active.count(o.landmark)) return false;
+          double depth = 0.0;
+          const double e2 =
+              WhitenedSquaredError(K_, o, kf.x.data(), landmarks_.at(o.landmark).data(), &depth);
+          const double bound = ResidualDof(K_, o) == 3 ? kChi2Quantile95Dof3 : kChi2Quantile95Dof2;
+          return e2 > bound || depth < options_.min_depth;
+        });
+        removed += static_cast<int>(obs.end() - end);
+        obs.erase(end, obs.end());
+      }
+    }
+    summary.num_outliers_removed += removed;
+    if (removed == 0 || round >= options_.max_outlier_rounds) break;
+  }
+  const auto counts = CountObservations();
+  for (LandmarkId id : active_before) {
+    if (!IsActive(id, counts)) ++summary.num_landmarks_culled;
+  }
+  summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+PoseOnlyResult SlidingWindowBa::TrackFrame(const std::vector<BaObservation>& observations,
+                                           const Pose& T_w_c_guess,
+                                           const PoseOnlyOptions& options) const {
+  const auto counts = CountObservations();
+  return EstimatePoseOnly(
+      K_, observations,
+      [&](LandmarkId id) -> std::optional<Eigen::Vector3d> {
+        if (!IsActive(id, counts)) return std::nullopt;
+        return landmarks_.at(id);
+      },
+      T_w_c_guess, options);
+}
+
+std::vector<KeyframeId> SlidingWindowBa::WindowKeyframes() const {
+  std::vector<KeyframeId> ids;
+  for (const KeyframeState& kf : window_) ids.push_back(kf.id);
+  return ids;
+}
+
+std::optional<Pose> SlidingWindowBa::KeyframePose(KeyframeId id) const {
+  for (const KeyframeState& kf : window_) {
+    if (kf.id == id) return BlockToPose(kf.x);
+  }
+  return std::nullopt;
+}
+
+std::optional<Eigen::Vector3d> SlidingWindowBa::LandmarkPosition(LandmarkId id) const {
+  const auto it = landmarks_.find(id);
+  if (it == landmarks_.end()) return std::nullopt;
+  return it->second;
+}
+
+std::map<LandmarkId, Eigen::Vector3d> SlidingWindowBa::Landmarks() const {
+  std::map<LandmarkId, Eigen::Vector3d> out;
+  for (const auto& [id, n] : CountObservations()) {
+    const auto it = landmarks_.find(id);
+    if (it != landmarks_.end()) out[id] = it->second;
+  }
+  return out;
+}
+
+}  // namespace dala

@@ -1,0 +1,179 @@
+#ifndef DALA_BACKEND_BA_SLIDING_WINDOW_BA_H_
+#define DALA_BACKEND_BA_SLIDING_WINDOW_BA_H_
+
+// Sliding-window bundle adjustment over the last N keyframes, older keyframes marginalised into
+// a linear prior (backend/ba/marginalization.h).
+//
+// State: the poses T_w_c of the window's keyframes (7-vector blocks on the SE(3) product manifold,
+// backend/ba/pose_block.h) and the world points p_w of the landmarks they observe. A landmark
+// enters the optimisation when it is seen by at least min_observations window keyframes and has
+// an initial position: given by SetLandmarkPosition, its last estimate (if it was marginalised
+// before and is seen again), stereo triangulation of its first stereo observation, or, for mono
+// observations only, a linear (DLT) triangulation from the window keyframes once the parallax
+// exceeds min_triangulation_parallax_deg.
+//
+// Factors: stereo / mono reprojection (backend/ba/reprojection_factors.h) with a robust loss,
+// and the marginalisation prior on the window poses.
+//
+// Marginalisation (when AddKeyframe finds the window full): the oldest keyframe m leaves, and
+// with it the optimised landmarks m observes (the "anchored" scheme of VINS/DSO/Basalt: a
+// landmark's observations in the other window keyframes are marginalised together, so the prior
+// lives on poses only and stays small: <= 6 (N-1) dimensions). The factors marginalised are all
+// observations of those landmarks plus the previous prior. Options::landmark_exit says what
+// happens to the landmarks the newest keyframe still tracks (default: they are marginalised into
+// the prior AND stay in the state with their other observations, as VINS-Mono does; those
+// observations then count twice). A landmark that left the state and is seen again comes back
+// as a new variable initialised at its last estimate. docs/backend.md compares the choices.
+
+// Gauge: the first num_fixed_keyframes keyframes ever added are held constant (default: 1 for a
+// stereo camera, 2 for a mono one, which also fixes the scale by their distance). Their
+// information passes into the prior relative to these constants, so the prior carries the gauge
+// when they leave. With use_marginalization = false (leaving keyframes are dropped), the oldest
+// window keyframes are held constant instead (the same count).
+//
+// Not thread-safe. Deterministic: the same inputs and options give bit-identical results
+// (ordered containers, num_threads = 1 by default).
+//
+// Usage:
+//   SlidingWindowBa ba(K, SlidingWindowBa::Options());
+//   for each keyframe: ba.AddKeyframe(kf); SlidingWindowBa::Summary s = ba.Optimize();
+//   between keyframes: ba.TrackFrame(observations, T_w_c_predicted, PoseOnlyOptions());
+
+#include <deque>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "backend/ba/ba_loss.h"
+#include "backend/ba/ba_types.h"
+#include "backend/ba/marginalization.h"
+#include "backend/ba/pose_block.h"
+#include "backend/ba/pose_only.h"
+
+namespace dala {
+
+class SlidingWindowBa {
+ public:
+  enum class LandmarkExit {
+    // Landmarks the newest keyframe still tracks stay in the state and only the leaving
+    // keyframe's observations of them are dropped (information lost, nothing counted twice);
+    // the others are marginalised with all their window observations (DSO/Basalt-like).
+    kDropTrackedObservations,
+    // Every landmark the leaving keyframe sees is marginalised with all its window
+    // observations; a track seen again restarts as a new variable (consistent, but the window
+    // can lose most of its landmarks at once).
+    kMarginalizeAll,
+    // As kMarginalizeAll for the prior, but the tracked landmarks stay in the state with their
+    // other observations (VINS-Mono-like): their information is counted twice (overconfident),
+    // but no track is cut.
+    kMarginalizeAllKeepTracks,
+  };
+
+  struct Options {
+    int window_size = 8;              // keyframes in the window (>= 2).
+    bool use_marginalization = true;  // false: leaving keyframes are dropped (for comparison).
+    // What happens to the landmarks the leaving keyframe sees (see the class comment):
+    LandmarkExit landmark_exit = LandmarkExit::kMarginalizeAllKeepTracks;
+    // Ablation: false => the marginalisation runs (the same landmarks and observations leave
+    // the window) but the prior is discarded, and the oldest window keyframes are held constant
+    // for the gauge. Shows what the prior carries.
+    bool keep_prior = true;
+    int num_fixed_keyframes = -1;  // gauge; -1 => 1 for stereo intrinsics, 2 for mono.
+    RobustLoss loss = RobustLoss::kHuber;
+    double loss_scale = 2.45;     // on the whitened residual norm; sqrt(5.991), chi2 95% mono.
+    int max_num_iterations = 10;  // per solve.
+    double max_solver_time_in_seconds = 0.2;  // per solve.
+    double function_tolerance = 1e-6;
+    int num_threads = 1;            // > 1 may change the result in the last bits.
+    bool remove_outliers = true;    // chi-square 95% test after each solve, then re-solve.
+    int max_outlier_rounds = 2;     // re-solves after removing outliers.
+    int min_observations = 2;       // a landmark is optimised when seen by >= this many keyframes.
+    double min_disparity_px = 0.5;  // stereo triangulation of new landmarks.
+    double min_triangulation_parallax_deg = 1;  // mono triangulation of new landmarks.
+    double min_depth = 0.05;  // metres; an observation of a point closer (or behind) is an outlier.
+    double prior_eigenvalue_floor = 1e-8;  // relative; see marginalization.h.
+
+    bool IsValid(std::string* why) const;
+  };
+
+  struct Summary {
+    int num_solves = 0;      // 1 + re-solves after outlier removal.
+    int num_iterations = 0;  // over all solves.
+    double initial_cost = 0.0;
+    double final_cost = 0.0;  // Ceres cost 0.5 sum rho(|r|^2) of the last solve.
+    double time_s = 0.0;      // wall time of Optimize().
+    int num_keyframes = 0;
+    int num_landmarks = 0;  // optimised in the last solve.
+    int num_residual_blocks = 0;
+    int num_outliers_removed = 0;
+    int num_landmarks_culled = 0;  // dropped because no observation remained.
+    bool usable = false;           // Ceres's IsSolutionUsable() of the last solve.
+
+    std::string BriefReport() const;
+  };
+
+  struct MarginalizedKeyframe {
+    KeyframeId id;
+    int64_t t_ns = 0;
+    Pose T_w_c;  // the estimate when it left the window.
+  };
+
+  SlidingWindowBa(const StereoIntrinsics& K, const Options& options);
+
+  // Gives (or overrides) the world position of a landmark; it is used as the initial value.
+  void SetLandmarkPosition(LandmarkId id, const Eigen::Vector3d& p_w);
+
+  // Adds a keyframe (kf.T_w_c is the initial guess). When the window is full the oldest keyframe
+  // is marginalised (or dropped) first, at the current estimate. CHECKs that ids increase.
+  void AddKeyframe(const BaKeyframe& kf);
+
+  // Optimises the window: solve, reject outliers, re-solve.
+  Summary Optimize();
+
+  // Pose-only tracking of a frame against the landmarks currently optimised in the window.
+  PoseOnlyResult TrackFrame(const std::vector<BaObservation>& observations, const Pose& T_w_c_guess,
+                            const PoseOnlyOptions& options) const;
+
+  std::vector<KeyframeId> WindowKeyframes() const;
+  std::optional<Pose> KeyframePose(KeyframeId id) const;
+  std::optional<Eigen::Vector3d> LandmarkPosition(LandmarkId id) const;
+  // Landmarks with a position that are currently in the window's map.
+  std::map<LandmarkId, Eigen::Vector3d> Landmarks() const;
+  const std::vector<MarginalizedKeyframe>& marginalized_keyframes() const { return marginalized_; }
+  const MarginalizationPrior& prior() const { return prior_; }
+  const Options& options() const { return options_; }
+
+ private:
+  struct KeyframeState {
+    KeyframeId id;
+    int64_t t_ns = 0;
+    PoseBlock x;
+    bool fixed = false;
+    std::vector<BaObservation> observations;
+  };
+
+  void MarginalizeOldest();
+  void InitializeStereoLandmarks(const KeyframeState& kf);
+  void InitializeMonoLandmarks();
+  bool IsActive(LandmarkId id, const std::map<LandmarkId, int>& counts) const;
+  std::map<LandmarkId, int> CountObservations() const;
+  bool TriangulateMono(LandmarkId id, Eigen::Vector3d* p_w) const;
+  bool IsConstant(size_t window_index) const;
+
+  StereoIntrinsics K_;
+  Options options_;
+  int num_fixed_ = 1;
+  int num_added_ = 0;
+  std::deque<KeyframeState> window_;
+  // Last known position of every landmark ever initialised (given, triangulated or estimated);
+  // the window's landmarks are those its keyframes observe. std::map: stable addresses for Ceres.
+  std::map<LandmarkId, Eigen::Vector3d> landmarks_;
+  MarginalizationPrior prior_;
+  std::vector<MarginalizedKeyframe> marginalized_;
+};
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_BA_SLIDING_WINDOW_BA_H_
