@@ -41,6 +41,14 @@ double EpipolarDistancePx(const PinholeCamera& cam, const Pose& T_cur_prev,
 
 }  // namespace
 
+HarrisOptions SequenceHarrisOptions() {
+  HarrisOptions options;
+  options.num_levels = 2;
+  options.max_points = 1000;
+  options.max_per_cell = 2;
+  return options;
+}
+
 bool FrontendOptions::IsValid(std::string* why) const {
   if (!harris.IsValid(why) || !stereo.IsValid(why) || !tracking_matcher.IsValid(why) ||
       !motion.IsValid(why) || !keyframe.IsValid(why)) {

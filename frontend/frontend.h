@@ -40,8 +40,12 @@
 
 namespace dala {
 
+// Detector settings for sequences: two pyramid levels (frame-to-frame scale changes are small)
+// and a bounded number of points, which keeps matching and estimation within a frame budget.
+HarrisOptions SequenceHarrisOptions();
+
 struct FrontendOptions {
-  HarrisOptions harris;
+  HarrisOptions harris = SequenceHarrisOptions();
   StereoOptions stereo;
   MatcherOptions tracking_matcher = MatcherOptions::ForTracking();
   MotionEstimatorOptions motion;

@@ -136,13 +136,13 @@ class Matcher {
   std::vector<Match> Run(MatchStats* stats) {
     std::vector<Match> result;
     if (na_ == 0 || nb_ == 0) return result;
-    FindCandidates();
     std::vector<Eigen::Vector2d> uv_a(na_), uv_b(nb_);
     for (size_t i = 0; i < na_; ++i) uv_a[i] = a_.points[i].uv;
     for (size_t j = 0; j < nb_; ++j) uv_b[j] = b_.points[j].uv;
     const double cell = 24.0;
     grid_a_ = std::make_unique<SpatialGrid>(uv_a, cell);
     grid_b_ = std::make_unique<SpatialGrid>(uv_b, cell);
+    FindCandidates();
     neighbours_.assign(na_, {});
     for (size_t i = 0; i < na_; ++i) {
       neighbours_[i] = grid_a_->Nearest(static_cast<int>(i), o_.num_neighbours);
@@ -209,8 +209,42 @@ class Matcher {
       });
       if (static_cast<int>(list->size()) > o_.top_k) list->pop_back();
     };
+    // With a prior, only the B points in the allowed region are visited: around the prediction
+    // (spatial grid) or in the row band of a rectified pair (B sorted by row). This keeps
+    // tracking and stereo linear in the number of points instead of quadratic.
+    std::vector<int> b_by_row(nb_);
+    for (size_t j = 0; j < nb_; ++j) b_by_row[j] = static_cast<int>(j);
+    const bool banded = prior_ != nullptr && prior_->type == MatchPrior::Type::kRectifiedStereo;
+    if (banded) {
+      std::sort(b_by_row.begin(), b_by_row.end(), [&](int l, int r) {
+        return b_.points[l].uv.y() < b_.points[r].uv.y() ||
+               (b_.points[l].uv.y() == b_.points[r].uv.y() && l < r);
+      });
+    }
+    std::vector<int> region;
+    auto region_of = [&](size_t i) -> const std::vector<int>& {
+      region.clear();
+      if (dense) {
+        region = b_by_row;  // Identity order.
+      } else if (banded) {
+        const double v = a_.points[i].uv.y();
+        auto lo = std::lower_bound(b_by_row.begin(), b_by_row.end(), v - prior_->max_dv,
+                                   [&](int j, double x) { return b_.points[j].uv.y() < x; });
+        for (auto it = lo; it != b_by_row.end() && b_.points[*it].uv.y() <= v + prior_->max_dv;
+             ++it) {
+          region.push_back(*it);
+        }
+        std::sort(region.begin(), region.end());
+      } else {
+        const Eigen::Vector2d& pred = prior_->predicted_uv[i];
+        if (pred.allFinite()) region = grid_b_->InRadius(pred, prior_->radius);
+        std::sort(region.begin(), region.end());
+      }
+      return region;
+    };
     for (size_t i = 0; i < na_; ++i) {
-      for (size_t j = 0; j < nb_; ++j) {
+      for (const int jj : region_of(i)) {
+        const size_t j = static_cast<size_t>(jj);
         if (dense && scores(i, j) < min_score) continue;
         const float s = score(static_cast<int>(i), static_cast<int>(j));
         if (s < min_score) continue;

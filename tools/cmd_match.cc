@@ -19,7 +19,6 @@
 #include "frontend/matcher.h"
 #include "tools/command.h"
 
-// NOTE for the coordinator: `out` and `json` are generic names that other commands (synth, eval)
 DECLARE_string(out);  // tools/common_flags.cc
 DECLARE_bool(json);  // tools/common_flags.cc
 DEFINE_string(homography, "",

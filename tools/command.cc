@@ -15,10 +15,6 @@ std::vector<Command>& Registry() {
   return commands;
 }
 
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 void PrintTopLevelHelp(std::ostream& os) {
   os << "dala: vision-based SLAM (stereo and monocular), after Lemaire et al., IJCV 2007.\n\n"
         "usage: dala COMMAND [ARGS] [--flags]\n\ncommands:\n";

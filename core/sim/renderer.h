@@ -12,16 +12,11 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/camera.h"
 #include "core/geometry.h"
 #include "core/sim/scene.h"
 
 namespace dala::sim {
-
-struct PinholeCamera {
-  int width = 752;
-  int height = 480;
-  double fx = 450, fy = 450, cx = 375.5, cy = 239.5;
-};
 
 // radiance: CV_32FC1 intensities (about [0, 255], not clamped). depth (optional): CV_32FC1, the
 // z coordinate in the camera frame of the surface seen at each pixel (metres), 0 where the

@@ -86,6 +86,13 @@ class SyntheticSequence {
   const SimOptions& options() const { return options_; }
   size_t size() const { return static_cast<size_t>(frames_); }
   const PinholeCamera& camera() const { return camera_; }
+  // The rectified rig of the sequence (baseline 0 when rendered mono).
+  StereoRig rig() const {
+    StereoRig rig;
+    rig.left = camera_;
+    rig.baseline = options_.stereo ? options_.baseline : 0.0;
+    return rig;
+  }
   // The 3x3 intrinsic matrix K (same for both cameras).
   Eigen::Matrix3d K() const;
   // T_c0_c1: the right camera in the left camera frame.

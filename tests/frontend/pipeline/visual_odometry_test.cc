@@ -12,18 +12,6 @@
 namespace dala {
 namespace {
 
-StereoRig RigOf(const sim::SyntheticSequence& seq) {
-  StereoRig rig;
-  rig.left.width = seq.options().width;
-  rig.left.height = seq.options().height;
-  rig.left.fx = seq.options().fx;
-  rig.left.fy = seq.options().fy;
-  rig.left.cx = seq.options().cx_or_centre();
-  rig.left.cy = seq.options().cy_or_centre();
-  rig.baseline = seq.options().baseline;
-  return rig;
-}
-
 struct VoRun {
   Trajectory estimate;
   int lost = 0;
@@ -32,7 +20,7 @@ struct VoRun {
 };
 
 VoRun RunVisualOdometry(const sim::SyntheticSequence& seq) {
-  Frontend frontend(RigOf(seq), FrontendOptions());
+  Frontend frontend(seq.rig(), FrontendOptions());
   VoRun run;
   for (size_t i = 0; i < seq.size(); ++i) {
     const Frame frame = seq.Render(i);
