@@ -28,6 +28,7 @@ struct StereoOptions {
   double max_dv_px = 1.5;     // Rows of a rectified pair agree to this (calibration error).
   double min_depth_m = 0.3;   // Points nearer than this are rejected (disparity upper bound).
   double max_depth_m = 80.0;  // Farther points are rejected: their depth is too uncertain.
+  bool refine_disparity = true;  // Refine u_right by SSD along the row (else: detector's u).
   int refine_window = 7;      // Side of the SSD window of the sub-pixel refinement (odd).
   double sigma_px = 1.0;      // Image noise (u, v), pixels.
   double sigma_disparity = 1.0;  // Disparity noise after refinement, pixels.

@@ -1,0 +1,60 @@
+#include "backend/system.h"
+
+#include <chrono>
+
+#include "backend/sliding_window_estimator.h"
+#include "core/error.h"
+
+namespace dala {
+
+std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptions& options) {
+  if (options.estimator == "ba" && options.mode == "stereo") {
+    return std::make_unique<SlidingWindowEstimator>(rig, options.ba);
+  }
+  throw Error() << "estimator '" << options.estimator << "' in mode '" << options.mode
+                << "' is not supported; available: ba/stereo";
+}
+
+System::System(const StereoRig& rig, const SystemOptions& options)
+    : rig_(rig), options_(options) {
+  std::string why;
+  if (!options_.IsValid(&why)) throw Error() << "invalid options: " << why;
+  if (!rig_.left.IsValid(&why)) throw Error() << "invalid calibration: " << why;
+  if (options_.mode == "stereo" && !rig_.is_stereo()) {
+    throw Error() << "stereo mode needs a stereo dataset; this one is monocular: use --mode mono";
+  }
+  estimator_ = MakeEstimator(rig_, options_);
+  frontend_ = std::make_unique<Frontend>(rig_, options_.frontend);
+}
+
+TrackResult System::Track(const Frame& frame) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  const FrameMeasurement m = frontend_->Process(frame);
+  const auto t1 = Clock::now();
+  const EstimatorOutput e = estimator_->Add(m);
+  const auto t2 = Clock::now();
+
+  FrameStats s;
+  s.frame = frame.id;
+  s.t_ns = frame.t_ns;
+  s.status = m.status;
+  s.valid = e.valid;
+  s.keyframe = m.is_keyframe;
+  s.features = static_cast<int>(m.observations.size());
+  for (const FeatureObservation& o : m.observations) s.tracked += o.track_length > 1;
+  s.landmarks = e.landmarks_in_state;
+  s.frontend = m.timings;
+  s.estimator_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
+  s.total_ms = std::chrono::duration<double, std::milli>(t2 - t0).count();
+  stats_.push_back(s);
+
+  TrackResult r;
+  r.status = m.status;
+  r.T_w_c = e.T_w_c;
+  r.valid = e.valid;
+  r.keyframe = m.is_keyframe;
+  return r;
+}
+
+}  // namespace dala

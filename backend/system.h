@@ -1,0 +1,79 @@
+#ifndef DALA_BACKEND_SYSTEM_H_
+#define DALA_BACKEND_SYSTEM_H_
+
+// dala::System: the pipeline. It owns a Frontend and an Estimator and wires them (DESIGN.md),
+// keeps per-frame statistics, and gives the trajectory of every frame and the map.
+//
+//   auto dataset = dala::OpenDataset("kitti/sequences/06");
+//   dala::System system(dataset->rig(), dala::SystemOptions());
+//   dala::Frame frame;
+//   while (dataset->Next(&frame)) {
+//     const dala::TrackResult r = system.Track(frame);   // r.status, r.T_w_c
+//   }
+//   dala::WriteTrajectoryTum("trajectory.txt", system.trajectory());
+//
+// The world frame is the first frame's left camera. Not thread-safe; deterministic.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "backend/estimator.h"
+#include "backend/system_options.h"
+#include "core/camera.h"
+#include "frontend/frontend.h"
+
+namespace dala {
+
+struct TrackResult {
+  TrackingStatus status = TrackingStatus::kInitializing;
+  Pose T_w_c = Pose::Identity();
+  bool valid = false;  // The estimator estimated this frame (false: extrapolated).
+  bool keyframe = false;
+};
+
+// What the run report records of each frame.
+struct FrameStats {
+  FrameId frame;
+  int64_t t_ns = 0;
+  TrackingStatus status = TrackingStatus::kInitializing;
+  bool valid = false;
+  bool keyframe = false;
+  int features = 0;
+  int tracked = 0;    // Observations continuing a track.
+  int landmarks = 0;  // In the estimator's state.
+  FrontendTimings frontend;
+  double estimator_ms = 0;
+  double total_ms = 0;
+};
+
+// Makes the estimator named by options.estimator/mode. Throws dala::Error for a combination
+// that does not exist (e.g. "ba" + "mono"), saying which do.
+std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptions& options);
+
+class System {
+ public:
+  // Throws dala::Error when the options are invalid or the rig does not suit the mode
+  // (stereo mode on a monocular dataset).
+  System(const StereoRig& rig, const SystemOptions& options);
+
+  TrackResult Track(const Frame& frame);
+
+  // Every frame tracked so far (estimates corrected by later optimisation).
+  Trajectory trajectory() const { return estimator_->trajectory(); }
+  std::vector<MapPoint> map() const { return estimator_->map(); }
+  const std::vector<FrameStats>& stats() const { return stats_; }
+  const SystemOptions& options() const { return options_; }
+  const Estimator& estimator() const { return *estimator_; }
+
+ private:
+  StereoRig rig_;
+  SystemOptions options_;
+  std::unique_ptr<Frontend> frontend_;
+  std::unique_ptr<Estimator> estimator_;
+  std::vector<FrameStats> stats_;
+};
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_SYSTEM_H_

@@ -1,0 +1,249 @@
+#include "backend/system_options.h"
+
+#include <cerrno>
+#include <cstdlib>
+#include <map>
+#include <sstream>
+
+#include "core/config.h"
+#include "core/error.h"
+
+namespace dala {
+
+bool SystemOptions::IsValid(std::string* why) const {
+  const auto fail = [&](const std::string& msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (estimator != "ba" && estimator != "ekf")
+    return fail("estimator must be 'ba' or 'ekf', not '" + estimator + "'");
+  if (mode != "stereo" && mode != "mono")
+    return fail("mode must be 'stereo' or 'mono', not '" + mode + "'");
+  return frontend.IsValid(why) && ba.IsValid(why);
+}
+
+void VisitOptions(SystemOptions* o, OptionVisitor* v) {
+  v->Field("", "estimator", &o->estimator);
+  v->Field("", "mode", &o->mode);
+  HarrisOptions& h = o->frontend.harris;
+  v->Field("harris", "sigma_d", &h.sigma_d);
+  v->Field("harris", "sigma_i", &h.sigma_i);
+  v->Field("harris", "k", &h.k);
+  v->Field("harris", "num_levels", &h.num_levels);
+  v->Field("harris", "cell_size", &h.cell_size);
+  v->Field("harris", "max_per_cell", &h.max_per_cell);
+  v->Field("harris", "max_points", &h.max_points);
+  MatcherOptions& m = o->frontend.tracking_matcher;
+  v->Field("matcher", "min_zncc", &m.min_zncc);
+  v->Field("matcher", "min_support", &m.min_support);
+  v->Field("matcher", "num_neighbours", &m.num_neighbours);
+  v->Field("matcher", "propagate", &m.propagate);
+  StereoOptions& s = o->frontend.stereo;
+  v->Field("stereo", "max_dv_px", &s.max_dv_px);
+  v->Field("stereo", "min_depth_m", &s.min_depth_m);
+  v->Field("stereo", "max_depth_m", &s.max_depth_m);
+  v->Field("stereo", "refine_disparity", &s.refine_disparity);
+  v->Field("stereo", "refine_window", &s.refine_window);
+  v->Field("stereo", "sigma_px", &s.sigma_px);
+  v->Field("stereo", "sigma_disparity", &s.sigma_disparity);
+  v->Field("stereo", "min_zncc", &s.matcher.min_zncc);
+  MotionEstimatorOptions& mo = o->frontend.motion;
+  v->Field("motion", "ransac_threshold_px", &mo.ransac_threshold_px);
+  v->Field("motion", "ransac_max_iterations", &mo.ransac_max_iterations);
+  v->Field("motion", "min_inliers", &mo.min_inliers);
+  v->Field("motion", "sigma_px", &mo.sigma_px);
+  int seed = static_cast<int>(mo.seed);
+  v->Field("motion", "seed", &seed);
+  mo.seed = static_cast<uint64_t>(seed);
+  KeyframePolicyOptions& k = o->frontend.keyframe;
+  v->Field("keyframe", "min_tracked_fraction", &k.min_tracked_fraction);
+  v->Field("keyframe", "max_parallax_px", &k.max_parallax_px);
+  v->Field("keyframe", "max_distance_m", &k.max_distance_m);
+  v->Field("keyframe", "max_rotation_rad", &k.max_rotation_rad);
+  v->Field("keyframe", "max_frames", &k.max_frames);
+  v->Field("keyframe", "min_frames", &k.min_frames);
+  FrontendOptions& f = o->frontend;
+  v->Field("frontend", "tracking_radius_px", &f.tracking_radius_px);
+  v->Field("frontend", "epipolar_gate_px", &f.epipolar_gate_px);
+  v->Field("frontend", "match_keyframe", &f.match_keyframe);
+  v->Field("frontend", "keyframe_gate_px", &f.keyframe_gate_px);
+  v->Field("frontend", "parallel_detection", &f.parallel_detection);
+  SlidingWindowEstimatorOptions& b = o->ba;
+  v->Field("ba", "window_size", &b.ba.window_size);
+  v->Field("ba", "use_marginalization", &b.ba.use_marginalization);
+  v->Field("ba", "loss_scale", &b.ba.loss_scale);
+  v->Field("ba", "max_num_iterations", &b.ba.max_num_iterations);
+  v->Field("ba", "max_solver_time_in_seconds", &b.ba.max_solver_time_in_seconds);
+  v->Field("ba", "remove_outliers", &b.ba.remove_outliers);
+  v->Field("ba", "min_observations", &b.ba.min_observations);
+  v->Field("ba", "max_new_landmarks_per_keyframe", &b.max_new_landmarks_per_keyframe);
+  v->Field("ba", "max_landmark_depth_m", &b.max_landmark_depth_m);
+}
+
+namespace {
+
+// Reads every field from the YAML sections, then rejects keys nobody asked for.
+class YamlReader : public OptionVisitor {
+ public:
+  explicit YamlReader(const ConfigNode& root) : root_(root) {}
+  void Field(const std::string& s, const std::string& k, double* v) override { Node(s).Read(k.c_str(), v); }
+  void Field(const std::string& s, const std::string& k, int* v) override { Node(s).Read(k.c_str(), v); }
+  void Field(const std::string& s, const std::string& k, bool* v) override { Node(s).Read(k.c_str(), v); }
+  void Field(const std::string& s, const std::string& k, std::string* v) override {
+    Node(s).Read(k.c_str(), v);
+  }
+  void Check() {
+    for (auto& [name, node] : children_) node.CheckNoUnknownKeys();
+    root_.CheckNoUnknownKeys();
+  }
+
+ private:
+  const ConfigNode& Node(const std::string& section) {
+    if (section.empty()) return root_;
+    auto it = children_.find(section);
+    if (it == children_.end()) it = children_.emplace(section, root_.Child(section.c_str())).first;
+    return it->second;
+  }
+  const ConfigNode& root_;
+  std::map<std::string, ConfigNode> children_;
+};
+
+std::string Qualified(const std::string& section, const std::string& key) {
+  return section.empty() ? key : section + "." + key;
+}
+
+// Applies one "section.key=value".
+class Setter : public OptionVisitor {
+ public:
+  Setter(std::string key, std::string value) : key_(std::move(key)), value_(std::move(value)) {}
+  void Field(const std::string& s, const std::string& k, double* v) override {
+    if (!Match(s, k)) return;
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(value_.c_str(), &end);
+    if (value_.empty() || *end != '\0' || errno) Bad("a number");
+    *v = x;
+  }
+  void Field(const std::string& s, const std::string& k, int* v) override {
+    if (!Match(s, k)) return;
+    char* end = nullptr;
+    errno = 0;
+    const long x = std::strtol(value_.c_str(), &end, 10);
+    if (value_.empty() || *end != '\0' || errno) Bad("an integer");
+    *v = static_cast<int>(x);
+  }
+  void Field(const std::string& s, const std::string& k, bool* v) override {
+    if (!Match(s, k)) return;
+    if (value_ == "true" || value_ == "1") {
+      *v = true;
+    } else if (value_ == "false" || value_ == "0") {
+      *v = false;
+    } else {
+      Bad("true or false");
+    }
+  }
+  void Field(const std::string& s, const std::string& k, std::string* v) override {
+    if (Match(s, k)) *v = value_;
+  }
+  bool found() const { return found_; }
+  const std::string& known() const { return known_; }
+
+ private:
+  bool Match(const std::string& s, const std::string& k) {
+    known_ += (known_.empty() ? "" : ", ") + Qualified(s, k);
+    if (Qualified(s, k) != key_) return false;
+    found_ = true;
+    return true;
+  }
+  [[noreturn]] void Bad(const char* what) {
+    throw Error() << "--set " << key_ << "=" << value_ << ": the value must be " << what;
+  }
+  std::string key_, value_;
+  bool found_ = false;
+  std::string known_;
+};
+
+class YamlWriter : public OptionVisitor {
+ public:
+  void Field(const std::string& s, const std::string& k, double* v) override { Put(s, k, Num(*v)); }
+  void Field(const std::string& s, const std::string& k, int* v) override { Put(s, k, std::to_string(*v)); }
+  void Field(const std::string& s, const std::string& k, bool* v) override { Put(s, k, *v ? "1" : "0"); }
+  void Field(const std::string& s, const std::string& k, std::string* v) override {
+    Put(s, k, "\"" + *v + "\"");
+  }
+  std::string Text() const { return os_.str(); }
+
+ private:
+  static std::string Num(double v) {
+    std::ostringstream os;
+    os.precision(17);
+    os << v;
+    std::string s = os.str();
+    // YAML (cv::FileStorage) reads "2" as an int: keep doubles recognisable.
+    if (s.find_first_of(".eE") == std::string::npos && s.find("inf") == std::string::npos) s += ".0";
+    return s;
+  }
+  void Put(const std::string& s, const std::string& k, const std::string& value) {
+    if (s != section_) {
+      section_ = s;
+      os_ << s << ":\n";
+    }
+    os_ << (s.empty() ? "" : "  ") << k << ": " << value << "\n";
+  }
+  std::ostringstream os_;
+  std::string section_;
+};
+
+class JsonWriter : public OptionVisitor {
+ public:
+  void Field(const std::string& s, const std::string& k, double* v) override { At(s)[k] = *v; }
+  void Field(const std::string& s, const std::string& k, int* v) override { At(s)[k] = *v; }
+  void Field(const std::string& s, const std::string& k, bool* v) override { At(s)[k] = *v; }
+  void Field(const std::string& s, const std::string& k, std::string* v) override { At(s)[k] = *v; }
+  nlohmann::json json = nlohmann::json::object();
+
+ private:
+  nlohmann::json& At(const std::string& s) { return s.empty() ? json : json[s]; }
+};
+
+}  // namespace
+
+void LoadSystemOptions(const std::string& yaml_path, SystemOptions* options) {
+  const ConfigNode root = LoadConfigFile(yaml_path);
+  YamlReader reader(root);
+  VisitOptions(options, &reader);
+  reader.Check();
+  std::string why;
+  if (!options->IsValid(&why)) throw Error() << yaml_path << ": invalid options: " << why;
+}
+
+void SetSystemOption(const std::string& assignment, SystemOptions* options) {
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw Error() << "--set '" << assignment << "': expected section.key=value, e.g. ba.window_size=10";
+  }
+  Setter setter(assignment.substr(0, eq), assignment.substr(eq + 1));
+  VisitOptions(options, &setter);
+  if (!setter.found()) {
+    throw Error() << "--set: unknown option '" << assignment.substr(0, eq)
+                  << "'; known options: " << setter.known();
+  }
+  std::string why;
+  if (!options->IsValid(&why)) throw Error() << "--set " << assignment << ": " << why;
+}
+
+std::string SystemOptionsToYaml(const SystemOptions& options) {
+  SystemOptions copy = options;
+  YamlWriter writer;
+  VisitOptions(&copy, &writer);
+  return "%YAML:1.0\n---\n" + writer.Text();
+}
+
+nlohmann::json SystemOptionsToJson(const SystemOptions& options) {
+  SystemOptions copy = options;
+  JsonWriter writer;
+  VisitOptions(&copy, &writer);
+  return writer.json;
+}
+
+}  // namespace dala

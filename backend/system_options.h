@@ -1,0 +1,56 @@
+#ifndef DALA_BACKEND_SYSTEM_OPTIONS_H_
+#define DALA_BACKEND_SYSTEM_OPTIONS_H_
+
+// SystemOptions: every component's options in one struct (DESIGN.md "Configuration"), and ONE
+// table of their user-settable keys, used four ways: the YAML loader (`dala run --config`),
+// `--set section.key=value`, `--dump-config`, and the "options" of the JSON run report.
+//
+//   estimator: ba            # ba | ekf
+//   mode: stereo             # stereo | mono
+//   harris: {num_levels: 2, max_points: 1000, ...}
+//   ba: {window_size: 8, ...}
+
+#include <functional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "backend/sliding_window_estimator.h"
+#include "frontend/frontend.h"
+
+namespace dala {
+
+struct SystemOptions {
+  std::string estimator = "ba";  // "ba" (sliding-window BA) or "ekf" (the paper's filters).
+  std::string mode = "stereo";   // "stereo" or "mono".
+  FrontendOptions frontend;
+  SlidingWindowEstimatorOptions ba;
+
+  bool IsValid(std::string* why) const;
+};
+
+// Visits every settable option as (section, key, pointer). Sections: "" (top level), "harris",
+// "matcher" (tracking), "stereo", "motion", "keyframe", "frontend", "ba".
+class OptionVisitor {
+ public:
+  virtual ~OptionVisitor() = default;
+  virtual void Field(const std::string& section, const std::string& key, double* v) = 0;
+  virtual void Field(const std::string& section, const std::string& key, int* v) = 0;
+  virtual void Field(const std::string& section, const std::string& key, bool* v) = 0;
+  virtual void Field(const std::string& section, const std::string& key, std::string* v) = 0;
+};
+void VisitOptions(SystemOptions* options, OptionVisitor* visitor);
+
+// Loads a YAML file over `options` (keys absent keep their value). dala::Error on an unknown key,
+// a wrong type or an unreadable file, naming the file and the key.
+void LoadSystemOptions(const std::string& yaml_path, SystemOptions* options);
+// Applies "section.key=value" (or "key=value" for top-level keys). dala::Error naming the key
+// and the known keys of that section when it does not exist, or the value when it does not parse.
+void SetSystemOption(const std::string& assignment, SystemOptions* options);
+// YAML text of every option (what --dump-config prints; LoadSystemOptions reads it back).
+std::string SystemOptionsToYaml(const SystemOptions& options);
+nlohmann::json SystemOptionsToJson(const SystemOptions& options);
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_SYSTEM_OPTIONS_H_
