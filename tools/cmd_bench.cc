@@ -2,7 +2,6 @@
 // and gathers ATE / RPE / KITTI errors, timings and memory into results.json/csv/md and a static
 // report.html. docs/benchmarking.md is the guide.
 #include <gflags/gflags.h>
-
 #include <unistd.h>
 
 #include <iostream>
@@ -63,8 +62,8 @@ int RunBenchCommand(const std::vector<std::string>& args) {
     return 0;
   }
   if (args.size() != 1) {
-    throw Error() << "expected one suite file (e.g. benchmarks/default.yaml), got "
-                  << args.size() << " arguments; see `dala bench --help`";
+    throw Error() << "expected one suite file (e.g. benchmarks/default.yaml), got " << args.size()
+                  << " arguments; see `dala bench --help`";
   }
   bench::BenchSuite suite = bench::LoadBenchSuite(args[0]);
   for (const std::string& folder : DatasetFlags()) bench::AddDatasetSequence(folder, &suite);

@@ -47,9 +47,9 @@ nlohmann::json RunSpec(const BenchRun& run) {
   const SequenceSpec& s = run.sequence;
   const ConfigSpec& c = run.config;
   return {{"sequence", s.is_rendered() ? nlohmann::json{{"preset", s.preset},
-                                                         {"frames", s.frames},
-                                                         {"seed", s.seed},
-                                                         {"mono", s.mono}}
+                                                        {"frames", s.frames},
+                                                        {"seed", s.seed},
+                                                        {"mono", s.mono}}
                                        : nlohmann::json{{"path", s.path}}},
           {"estimator", c.estimator},
           {"mode", c.mode},
@@ -127,8 +127,8 @@ std::string RenderSequence(const SequenceSpec& s, const BenchOptions& options,
   std::error_code ec;
   fs::remove_all(tmp, ec);
   CreateDirectories(fs::path(folder).parent_path().string());
-  std::vector<std::string> argv = {options.dala_path, "synth", "--preset", s.preset, "--out", tmp,
-                                   "--seed", std::to_string(s.seed)};
+  std::vector<std::string> argv = {options.dala_path, "synth", "--preset", s.preset,
+                                   "--out",           tmp,     "--seed",   std::to_string(s.seed)};
   if (s.frames > 0) argv.insert(argv.end(), {"--frames", std::to_string(s.frames)});
   if (s.mono) argv.push_back("--mono");
   SubprocessOptions sub;
@@ -153,9 +153,9 @@ std::string RenderSequence(const SequenceSpec& s, const BenchOptions& options,
 std::vector<std::string> RunCommand(const BenchRun& run, const std::string& dala,
                                     const std::string& sequence_folder,
                                     const std::string& run_dir) {
-  std::vector<std::string> argv = {dala,          "run",  sequence_folder,  "--out",
-                                   run_dir,       "--estimator", run.config.estimator,
-                                   "--mode",      run.config.mode};
+  std::vector<std::string> argv = {dala,           "run",         sequence_folder,      "--out",
+                                   run_dir,        "--estimator", run.config.estimator, "--mode",
+                                   run.config.mode};
   if (!run.config.config_file.empty()) {
     argv.insert(argv.end(), {"--config", run.config.config_file});
   }
@@ -223,8 +223,8 @@ BenchSummary RunBench(const BenchSuite& suite, const BenchOptions& options_in) {
   const std::vector<BenchRun> all = MakeRunList(suite);
   const std::vector<BenchRun> runs = SelectShard(all, options.shard);
   std::cerr << "dala bench: " << runs.size() << " runs (shard " << options.shard.ToString()
-            << " of " << all.size() << "), " << options.jobs << " at once, into "
-            << options.out_dir << std::endl;
+            << " of " << all.size() << "), " << options.jobs << " at once, into " << options.out_dir
+            << std::endl;
 
   // Sequences of this shard: render the presets, load the ground truth.
   std::map<std::string, SequenceState> sequences;
@@ -253,7 +253,8 @@ BenchSummary RunBench(const BenchSuite& suite, const BenchOptions& options_in) {
               << std::endl;
   });
   for (auto& [name, state] : sequences) {
-    if (state.render_error.empty()) state.ground_truth = LoadGroundTruth(state.folder, &state.gt_why);
+    if (state.render_error.empty())
+      state.ground_truth = LoadGroundTruth(state.folder, &state.gt_why);
   }
 
   std::vector<BenchRunResult> rows(runs.size());
@@ -361,8 +362,9 @@ void MergeBench(const std::vector<std::string>& dirs, const std::string& out_dir
         fs::remove_all(to, ec);
         CreateDirectories(to);
         fs::copy(dir + "/" + r.run_dir, to, fs::copy_options::recursive, ec);
-        if (ec) throw Error() << "cannot copy " << dir << "/" << r.run_dir << " to " << to << ": "
-                              << ec.message();
+        if (ec)
+          throw Error() << "cannot copy " << dir << "/" << r.run_dir << " to " << to << ": "
+                        << ec.message();
       }
       rows.push_back(r);
     }

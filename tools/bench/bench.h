@@ -31,10 +31,10 @@ struct BenchOptions {
 };
 
 struct BenchSummary {
-  int runs = 0;       // Runs of this shard.
-  int ok = 0;         // Finished with status ok.
-  int skipped = 0;    // Already done, not rerun.
-  int not_ok = 0;     // Failed, crashed, timed out or unsupported.
+  int runs = 0;     // Runs of this shard.
+  int ok = 0;       // Finished with status ok.
+  int skipped = 0;  // Already done, not rerun.
+  int not_ok = 0;   // Failed, crashed, timed out or unsupported.
 };
 
 // Runs the suite (throws dala::Error on an unwritable output folder or a missing `dala`).

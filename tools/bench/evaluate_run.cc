@@ -145,8 +145,8 @@ void EvaluateRun(const BenchRun& run, const SubprocessResult& child, const std::
   if (child.signaled) {
     r->status = kStatusCrashed;
     r->signal = child.signal;
-    r->error = "killed by signal " + std::to_string(child.signal) + " (" +
-               strsignal(child.signal) + ")";
+    r->error =
+        "killed by signal " + std::to_string(child.signal) + " (" + strsignal(child.signal) + ")";
     const std::string tail = TailOfFile(log, 3);
     if (!tail.empty()) r->error += ": " + tail;
     return;
@@ -156,8 +156,9 @@ void EvaluateRun(const BenchRun& run, const SubprocessResult& child, const std::
     const std::string tail = TailOfFile(log);
     std::string lower = tail;
     std::transform(lower.begin(), lower.end(), lower.begin(), ::tolower);
-    const bool unsupported = child.exit_code == 2 && (lower.find("not supported") != std::string::npos ||
-                                                      lower.find("unsupported") != std::string::npos);
+    const bool unsupported =
+        child.exit_code == 2 && (lower.find("not supported") != std::string::npos ||
+                                 lower.find("unsupported") != std::string::npos);
     r->status = unsupported ? kStatusUnsupported : kStatusFailed;
     r->error = "exit status " + std::to_string(child.exit_code) + (tail.empty() ? "" : ": " + tail);
     return;
@@ -235,8 +236,7 @@ void EvaluateRun(const BenchRun& run, const SubprocessResult& child, const std::
   series->distance_m = e1.pair_distance_m;
   series->ate_m = e1.ate.translation_errors;
   try {
-    PlotEvaluation(*ground_truth, aligned, e1,
-                   run_dir_abs + "/eval.png");
+    PlotEvaluation(*ground_truth, aligned, e1, run_dir_abs + "/eval.png");
     r->plot_trajectory = r->run_dir + "/eval.png";
   } catch (const Error& e) {
     AppendError(r, e.what());
@@ -249,9 +249,12 @@ nlohmann::json ToJson(const RunSeries& s) {
     for (double x : v) a.push_back(std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr));
     return a;
   };
-  return {{"frame", clean(s.frame)},           {"ms_total", clean(s.ms_total)},
-          {"ms_frontend", clean(s.ms_frontend)}, {"ms_estimator", clean(s.ms_estimator)},
-          {"distance_m", clean(s.distance_m)}, {"ate_m", clean(s.ate_m)}};
+  return {{"frame", clean(s.frame)},
+          {"ms_total", clean(s.ms_total)},
+          {"ms_frontend", clean(s.ms_frontend)},
+          {"ms_estimator", clean(s.ms_estimator)},
+          {"distance_m", clean(s.distance_m)},
+          {"ate_m", clean(s.ate_m)}};
 }
 
 RunSeries RunSeriesFromJson(const nlohmann::json& j) {

@@ -22,7 +22,7 @@ const cv::Scalar kAxis(90, 90, 90);
 // Distinct colours (BGR), a Tableau-like palette.
 cv::Scalar SeriesColour(size_t i) {
   static const cv::Scalar kPalette[] = {
-      {180, 119, 31}, {14, 127, 255}, {44, 160, 44},  {40, 39, 214},  {189, 103, 148},
+      {180, 119, 31}, {14, 127, 255},  {44, 160, 44},   {40, 39, 214},  {189, 103, 148},
       {75, 86, 140},  {194, 119, 227}, {127, 127, 127}, {34, 189, 188}, {207, 190, 23}};
   return kPalette[i % (sizeof(kPalette) / sizeof(kPalette[0]))];
 }
@@ -108,8 +108,7 @@ void DrawLineChart(const std::vector<ChartSeries>& series, const LineChartOption
     Text(&patch, options.y_label, {2, size.height + 3}, 0.48);
     cv::Mat rotated;
     cv::rotate(patch, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
-    const cv::Rect roi(4, area.y + area.height / 2 - rotated.rows / 2, rotated.cols,
-                       rotated.rows);
+    const cv::Rect roi(4, area.y + area.height / 2 - rotated.rows / 2, rotated.cols, rotated.rows);
     if ((roi & cv::Rect(0, 0, img.cols, img.rows)) == roi) rotated.copyTo(img(roi));
   }
   // Series, clipped to the plot area.

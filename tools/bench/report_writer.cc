@@ -80,11 +80,20 @@ std::string HtmlEscape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -93,9 +102,12 @@ std::string HtmlEscape(const std::string& s) {
 std::string MdEscape(const std::string& s) {
   std::string out;
   for (char c : s) {
-    if (c == '|') out += "\\|";
-    else if (c == '\n') out += "<br>";
-    else out += c;
+    if (c == '|')
+      out += "\\|";
+    else if (c == '\n')
+      out += "<br>";
+    else
+      out += c;
   }
   return out;
 }
@@ -227,12 +239,13 @@ td.err { text-align: left; min-width: 260px; max-width: 420px; white-space: pre-
 .cards { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
 .card { border: 1px solid #ddd; border-radius: 6px; padding: 8px 12px; background: #fafafa; }
 .card h3 { margin: 4px 0 8px 0; font-size: 16px; }
-.card { flex: 0 1 660px; }
+.card { flex: 0 1 640px; box-sizing: border-box; }
 .card img { display: block; width: 100%; margin-bottom: 8px; }
 .compare > div { flex: 1 1 640px; max-width: 900px; }
 .compare img { width: 100%; }
 div.err { color: #a00; white-space: pre-wrap; max-width: 860px; }
 .small { font-size: 12px; color: #666; }
+ul.failures { margin: 8px 0 16px 0; padding-left: 20px; } ul.failures li { margin-bottom: 6px; }
 )";
 
 std::string StatusSpan(const std::string& status) {
@@ -249,14 +262,14 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
   };
   int ok = 0;
   for (const BenchRunResult& r : rows) ok += r.status == kStatusOk;
-  std::string h = "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\">\n"
-                  "<title>dala bench results</title>\n<style>" +
-                  std::string(kCss) + "</style></head><body>\n";
-  h += "<h1>dala bench results</h1>\n<div class=\"meta\">suite <code>" +
-       HtmlEscape(header.suite) + "</code>" +
-       (header.shard.empty() ? "" : ", shard " + HtmlEscape(header.shard)) + " &middot; " +
-       std::to_string(rows.size()) + " of " + std::to_string(header.runs_total) + " runs, " +
-       std::to_string(ok) + " ok";
+  std::string h =
+      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\">\n"
+      "<title>dala bench results</title>\n<style>" +
+      std::string(kCss) + "</style></head><body>\n";
+  h += "<h1>dala bench results</h1>\n<div class=\"meta\">suite <code>" + HtmlEscape(header.suite) +
+       "</code>" + (header.shard.empty() ? "" : ", shard " + HtmlEscape(header.shard)) +
+       " &middot; " + std::to_string(rows.size()) + " of " + std::to_string(header.runs_total) +
+       " runs, " + std::to_string(ok) + " ok";
   if (!header.merged_from.empty()) {
     h += " &middot; merged from " + std::to_string(header.merged_from.size()) + " folders";
   }
@@ -327,7 +340,8 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
 
   // Per sequence: the comparison charts, then each run's plots.
   for (const std::string& s : g.sequences) {
-    h += "<h2 id=\"seq-" + HtmlEscape(s) + "\">" + HtmlEscape(s) + "</h2>\n<div class=\"cards "
+    h += "<h2 id=\"seq-" + HtmlEscape(s) + "\">" + HtmlEscape(s) +
+         "</h2>\n<div class=\"cards "
          "compare\">";
     for (const auto* m : {&compare_ate, &compare_time}) {
       const auto it = m->find(s);
@@ -336,10 +350,22 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
              "\"></div>";
       }
     }
-    h += "</div>\n<div class=\"cards\">\n";
+    h += "</div>\n";
+    // Runs without plots in a compact list, then a card per run with its plots.
+    std::string failures;
     for (const std::string& c : g.configs) {
       const BenchRunResult* r = g.At(s, c);
-      if (r == nullptr) continue;
+      if (r == nullptr || r->status == kStatusOk) continue;
+      const std::string log = r->run_dir + "/log.txt";
+      failures += "<li><b>" + HtmlEscape(c) + "</b> " + StatusSpan(r->status) +
+                  (exists(log) ? " (<a href=\"" + HtmlEscape(log) + "\">log</a>)" : "") +
+                  "<div class=\"err small\">" + HtmlEscape(r->error) + "</div></li>\n";
+    }
+    if (!failures.empty()) h += "<ul class=\"failures\">\n" + failures + "</ul>\n";
+    h += "<div class=\"cards\">\n";
+    for (const std::string& c : g.configs) {
+      const BenchRunResult* r = g.At(s, c);
+      if (r == nullptr || r->status != kStatusOk) continue;
       h += "<div class=\"card\"><h3>" + HtmlEscape(c) + " &middot; " + StatusSpan(r->status) +
            "</h3>\n";
       if (r->status == kStatusOk && r->ate_rmse) {
@@ -432,7 +458,8 @@ void WriteBenchOutputs(const std::string& out_dir, const BenchHeader& header,
   if (!header.merged_from.empty()) j["merged_from"] = header.merged_from;
   j["runs"] = nlohmann::json::array();
   for (const BenchRunResult& r : rows) j["runs"].push_back(ToJson(r));
-  WriteFileAtomically(out_dir + "/results.json", [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+  WriteFileAtomically(out_dir + "/results.json",
+                      [&](std::ostream& os) { os << j.dump(2) << "\n"; });
   WriteFileAtomically(out_dir + "/results.csv", [&](std::ostream& os) { os << ResultsCsv(rows); });
   WriteFileAtomically(out_dir + "/results.md",
                       [&](std::ostream& os) { os << Markdown(header, rows); });
@@ -458,11 +485,13 @@ std::vector<BenchRunResult> ReadBenchResults(const std::string& path, BenchHeade
     throw Error() << path << ": expected {\"runs\": [...]} as written by dala bench";
   }
   header->suite = j.value("suite", "");
-  header->shard = j.contains("shard") && j["shard"].is_string() ? j["shard"].get<std::string>() : "";
+  header->shard =
+      j.contains("shard") && j["shard"].is_string() ? j["shard"].get<std::string>() : "";
   header->runs_total = j.value("runs_total", 0);
   std::vector<BenchRunResult> rows;
   for (size_t i = 0; i < j["runs"].size(); ++i) {
-    rows.push_back(BenchRunResultFromJson(j["runs"][i], path + ": runs[" + std::to_string(i) + "]"));
+    rows.push_back(
+        BenchRunResultFromJson(j["runs"][i], path + ": runs[" + std::to_string(i) + "]"));
   }
   return rows;
 }

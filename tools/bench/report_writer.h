@@ -19,9 +19,9 @@
 namespace dala::bench {
 
 struct BenchHeader {
-  std::string suite;       // Suite file (or "merged").
-  std::string shard;       // "i/n", or empty for merged / unsharded output.
-  int runs_total = 0;      // Runs in the full (unsharded) list.
+  std::string suite;                     // Suite file (or "merged").
+  std::string shard;                     // "i/n", or empty for merged / unsharded output.
+  int runs_total = 0;                    // Runs in the full (unsharded) list.
   std::vector<std::string> merged_from;  // Folders merged by `dala bench merge`.
 };
 

@@ -60,15 +60,21 @@ void ForEachField(R& r, F&& f) {
 struct Writer {
   nlohmann::json* j;
   template <typename T>
-  void operator()(const char* key, const std::optional<T>& v) const { Put(j, key, v); }
+  void operator()(const char* key, const std::optional<T>& v) const {
+    Put(j, key, v);
+  }
   template <typename T>
-  void operator()(const char* key, const T& v) const { (*j)[key] = v; }
+  void operator()(const char* key, const T& v) const {
+    (*j)[key] = v;
+  }
 };
 
 struct Reader {
   const nlohmann::json& j;
   template <typename T>
-  void operator()(const char* key, std::optional<T>& v) const { Get(j, key, &v); }
+  void operator()(const char* key, std::optional<T>& v) const {
+    Get(j, key, &v);
+  }
   template <typename T>
   void operator()(const char* key, T& v) const {
     if (j.contains(key)) v = j.at(key).get<T>();

@@ -47,8 +47,8 @@ struct BenchRunResult {
   std::optional<double> path_length_m;
   std::optional<double> ate_rmse, ate_mean, ate_median, ate_max;
   std::optional<double> scale;
-  std::optional<double> rpe_trans, rpe_rot_deg;      // RPE over 1 frame: RMSE, m and deg.
-  std::optional<double> rpe10_trans, rpe10_rot_deg;  // RPE over 10 frames.
+  std::optional<double> rpe_trans, rpe_rot_deg;             // RPE over 1 frame: RMSE, m and deg.
+  std::optional<double> rpe10_trans, rpe10_rot_deg;         // RPE over 10 frames.
   std::optional<double> t_err_percent, r_err_deg_per_100m;  // KITTI segments.
 
   // Plots, relative to the bench output folder; empty when not drawn.

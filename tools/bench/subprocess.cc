@@ -27,10 +27,10 @@ SubprocessResult RunSubprocess(const std::vector<std::string>& argv,
   std::vector<char*> c_argv;
   for (const std::string& a : argv) c_argv.push_back(const_cast<char*>(a.c_str()));
   c_argv.push_back(nullptr);
-  const int log_fd = options.log_path.empty()
-                         ? open("/dev/null", O_WRONLY | O_CLOEXEC)
-                         : open(options.log_path.c_str(),
-                                O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int log_fd =
+      options.log_path.empty()
+          ? open("/dev/null", O_WRONLY | O_CLOEXEC)
+          : open(options.log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (log_fd < 0) {
     result.error = "cannot open the log " + options.log_path + ": " + std::strerror(errno);
     return result;

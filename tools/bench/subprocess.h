@@ -18,12 +18,12 @@ struct SubprocessOptions {
 };
 
 struct SubprocessResult {
-  bool started = false;     // False when fork/exec failed: see error.
-  bool exited = false;      // Exited normally: exit_code is valid.
+  bool started = false;  // False when fork/exec failed: see error.
+  bool exited = false;   // Exited normally: exit_code is valid.
   int exit_code = -1;
-  bool signaled = false;    // Killed by a signal: signal is valid.
+  bool signaled = false;  // Killed by a signal: signal is valid.
   int signal = 0;
-  bool timed_out = false;   // Killed by us after the timeout (then also signaled).
+  bool timed_out = false;  // Killed by us after the timeout (then also signaled).
   double wall_s = 0.0;
   double peak_rss_mb = 0.0;  // The child's ru_maxrss (wait4), MiB.
   std::string error;         // Why it did not start.

@@ -1,10 +1,10 @@
 #include "tools/bench/suite.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <opencv2/core.hpp>
-#include <cctype>
 #include <set>
 #include <stdexcept>
 #include <tuple>

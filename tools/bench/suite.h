@@ -32,15 +32,15 @@ struct SequenceSpec {
 };
 
 struct ConfigSpec {
-  std::string name;                // Folder name under DIR/runs/SEQ: [A-Za-z0-9_.-]+.
-  std::string estimator = "ba";    // "ba" or "ekf".
-  std::string mode = "stereo";     // "stereo" or "mono".
-  std::string config_file;         // `dala run --config` (absolute), optional.
-  std::vector<std::string> set;    // `dala run --set key=value`, in order.
+  std::string name;              // Folder name under DIR/runs/SEQ: [A-Za-z0-9_.-]+.
+  std::string estimator = "ba";  // "ba" or "ekf".
+  std::string mode = "stereo";   // "stereo" or "mono".
+  std::string config_file;       // `dala run --config` (absolute), optional.
+  std::vector<std::string> set;  // `dala run --set key=value`, in order.
 };
 
 struct BenchSuite {
-  std::string file;  // Where it was read from (messages, results.json).
+  std::string file;        // Where it was read from (messages, results.json).
   double timeout_s = 0.0;  // Per run; 0 = no timeout.
   std::vector<SequenceSpec> sequences;
   std::vector<ConfigSpec> configurations;

@@ -1,4 +1,6 @@
 // The suite file, the run list and its shards (tools/bench/suite.h), percentiles.
+#include "tools/bench/suite.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -8,7 +10,6 @@
 #include "core/error.h"
 #include "tests/test_util.h"
 #include "tools/bench/evaluate_run.h"
-#include "tools/bench/suite.h"
 
 namespace dala::bench {
 namespace {
@@ -80,8 +81,7 @@ TEST(BenchSuite, ErrorsNameTheFileTheKeyAndWhatIsExpected) {
        "configurations[0].estimator: unknown estimator 'orb'; expected ba or ekf"},
       {seqs + "configurations:\n  - {name: c, estimator: ba, mode: rgbd}\n",
        "configurations[0].mode: unknown mode 'rgbd'; expected stereo or mono"},
-      {seqs + "configurations:\n  - {name: c, estimator: ba}\n",
-       "configurations[0].mode: missing"},
+      {seqs + "configurations:\n  - {name: c, estimator: ba}\n", "configurations[0].mode: missing"},
       {"sequences:\n  - {name: a, preset: rover_loop, frams: 3}\n" + cfgs,
        "sequences[0].frams: unknown key"},
       {"sequences:\n  - {name: a, preset: rover_loop, frames: -3}\n" + cfgs,
@@ -121,7 +121,8 @@ TEST(BenchSuite, DatasetFlagAddsAFolderNamedAfterIt) {
 }
 
 TEST(BenchSuite, DefaultSuiteIsValid) {
-  const BenchSuite suite = LoadBenchSuite(std::string(DALA_SOURCE_DIR) + "/benchmarks/default.yaml");
+  const BenchSuite suite =
+      LoadBenchSuite(std::string(DALA_SOURCE_DIR) + "/benchmarks/default.yaml");
   EXPECT_EQ(suite.sequences.size(), 5u);
   EXPECT_EQ(suite.configurations.size(), 4u);
   int frames = 0;
