@@ -286,6 +286,22 @@ TEST_F(BenchCli, KillsARunAfterTheTimeout) {
   EXPECT_EQ(runs.at("s/quick")["status"], "ok");
 }
 
+TEST_F(BenchCli, ASequenceThatCannotBeRenderedFailsItsRunsOnly) {
+  std::ofstream(suite_) << "sequences:\n  - {name: good, preset: fast, frames: 8}\n"
+                           "  - {name: bad, preset: broken, frames: 8}\n"
+                           "configurations:\n  - {name: ba-stereo, estimator: ba, mode: stereo}\n";
+  const std::string out = dir_ / "out";
+  const CliResult r = BenchSuite(out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("sequence bad: FAILED"));
+  const auto runs = ByKey(Results(out));
+  EXPECT_EQ(runs.at("good/ba-stereo")["status"], "ok");
+  EXPECT_EQ(runs.at("bad/ba-stereo")["status"], "failed");
+  EXPECT_THAT(runs.at("bad/ba-stereo")["error"].get<std::string>(),
+              HasSubstr("unknown preset 'broken'"));
+  EXPECT_FALSE(fs::exists(out + "/sequences/bad"));  // Nothing half-rendered left as done.
+}
+
 TEST_F(BenchCli, AddsDatasetFoldersFromTheCommandLine) {
   // A KITTI-like folder with ground truth, as `dala synth` writes (made by the fake).
   const std::string data = dir_ / "mydata";

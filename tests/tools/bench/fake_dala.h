@@ -6,6 +6,7 @@
 //  - synth --out DIR [--frames N] [--seed S] [--preset P]: a KITTI-like folder (times.txt,
 //    poses.txt, calib.txt, synth.yaml) whose path is a 40 m square, 2 m per frame (20 frames a
 //    side), identity orientations. Each call appends a line to DIR/../../synth_calls.txt.
+//    --preset broken: exit 2 with a message.
 //  - run SEQ --out RUNDIR --estimator E --mode M [--set k=v]...: trajectory.txt (TUM) = ground
 //    truth with a known error, report.json with per-frame times 10 + (i % 10) ms; appends
 //    "run E M" to RUNDIR/../../../run_calls.txt.
@@ -27,6 +28,7 @@ if [ "$cmd" = synth ]; then
       --preset) preset=$2; shift;; --mono) ;; esac; shift
   done
   echo "synth $preset" >> "$(dirname "$out")/../synth_calls.txt"
+  if [ "$preset" = broken ]; then echo "dala synth: error: unknown preset 'broken'" >&2; exit 2; fi
   mkdir -p "$out"
   awk -v n=$frames 'BEGIN { for (i = 0; i < n; i++) printf "%.6f\n", i * 0.1 }' > "$out/times.txt"
   awk -v n=$frames 'BEGIN { for (i = 0; i < n; i++) { s = int(i / 20) % 4; j = i % 20;
