@@ -189,3 +189,37 @@ TEST(BenchPercentile, InterpolatesLikeNumpy) {
 
 }  // namespace
 }  // namespace dala::bench
+
+namespace dala::bench {
+namespace {
+
+TEST(BenchGroundTruth, KittiFolderUsesPosesAndTimes) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+  std::string why;
+  const auto gt = LoadGroundTruth(testing::SharedDataDir() + "/kitti06_0000-0050", &why);
+  ASSERT_TRUE(gt.has_value()) << why;
+  EXPECT_EQ(gt->size(), 51u);
+  EXPECT_TRUE(gt->has_timestamps);
+  EXPECT_EQ(gt->poses[10].t_ns, 1000000000);  // times.txt: 0.1 s steps.
+  EXPECT_GT(gt->PathLength(), 40.0);
+}
+
+TEST(BenchGroundTruth, EurocFolderGoesThroughOpenDataset) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("euroc_v101_micro");
+  std::string why;
+  const auto gt = LoadGroundTruth(testing::SharedDataDir() + "/euroc_v101_micro", &why);
+  ASSERT_TRUE(gt.has_value()) << why;
+  EXPECT_GT(gt->size(), 10u);  // Interpolated at (most of) the 20 frame times.
+  EXPECT_LE(gt->size(), 20u);
+  EXPECT_TRUE(gt->has_timestamps);
+}
+
+TEST(BenchGroundTruth, AFolderWithoutOneSaysWhy) {
+  testing::TempDir dir;
+  std::string why;
+  EXPECT_FALSE(LoadGroundTruth(dir.path(), &why).has_value());
+  EXPECT_THAT(why, HasSubstr(dir.path()));
+}
+
+}  // namespace
+}  // namespace dala::bench
