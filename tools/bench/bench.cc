@@ -163,6 +163,66 @@ std::vector<std::string> RunCommand(const BenchRun& run, const std::string& dala
   return argv;
 }
 
+// Where a run's outputs go, relative to the output folder.
+std::string RunDirOf(const BenchRun& run) {
+  return "runs/" + run.sequence.name + "/" + run.config.name;
+}
+
+// Resume: a run whose folder holds its report.json and a done marker for the same specification
+// is not rerun; its recorded row is reused.
+bool ReuseDoneRun(const BenchRun& run, const std::string& out_dir, BenchRunResult* row) {
+  const std::string run_dir = out_dir + "/" + RunDirOf(run);
+  if (!fs::is_regular_file(run_dir + "/report.json")) return false;
+  const auto done = ReadJsonFile(run_dir + "/" + kDoneMarker);
+  if (!done || !done->contains("spec") || done->at("spec") != RunSpec(run) ||
+      !done->contains("result")) {
+    return false;
+  }
+  try {
+    *row = BenchRunResultFromJson(done->at("result"), run_dir + "/" + kDoneMarker);
+  } catch (const Error&) {
+    return false;  // A damaged marker: rerun.
+  }
+  row->index = run.index;
+  return true;
+}
+
+// Runs `dala run` in a fresh run folder, evaluates it and writes the done marker.
+void ExecuteRun(const BenchRun& run, const SequenceState& seq, const BenchOptions& options,
+                double timeout_s, BenchRunResult* r) {
+  const std::string run_dir = options.out_dir + "/" + RunDirOf(run);
+  const std::vector<std::string> argv = RunCommand(run, options.dala_path, seq.folder, run_dir);
+  r->index = run.index;
+  r->sequence = run.sequence.name;
+  r->config = run.config.name;
+  r->estimator = run.config.estimator;
+  r->mode = run.config.mode;
+  r->run_dir = RunDirOf(run);
+  r->command = ShellJoin(argv);
+  try {
+    std::error_code ec;
+    fs::remove_all(run_dir, ec);  // No stale outputs of an earlier attempt.
+    CreateDirectories(run_dir);
+    if (!seq.render_error.empty()) {
+      r->status = kStatusFailed;
+      r->error = "sequence not available: " + seq.render_error;
+    } else {
+      SubprocessOptions sub;
+      sub.log_path = run_dir + "/log.txt";
+      sub.timeout_s = timeout_s;
+      const SubprocessResult child = RunSubprocess(argv, sub);
+      RunSeries series;
+      EvaluateRun(run, child, run_dir, seq.ground_truth, seq.gt_why, r, &series);
+      WriteJsonFile(run_dir + "/" + kSeriesFile, ToJson(series));
+    }
+    // The done marker last: it is what resume trusts.
+    WriteJsonFile(run_dir + "/" + kDoneMarker, {{"spec", RunSpec(run)}, {"result", ToJson(*r)}});
+  } catch (const Error& e) {
+    r->status = kStatusFailed;
+    r->error += (r->error.empty() ? "" : "; ") + std::string(e.what());
+  }
+}
+
 std::string Describe(const BenchRunResult& r) {
   std::string line = r.sequence + "/" + r.config + "  " + r.status + "  " + Seconds(r.wall_s);
   if (r.ate_rmse) {
@@ -261,60 +321,14 @@ BenchSummary RunBench(const BenchSuite& suite, const BenchOptions& options_in) {
   std::vector<char> skipped(runs.size(), 0);
   ProgressPrinter progress(static_cast<int>(runs.size()));
   ParallelFor(static_cast<int>(runs.size()), options.jobs, [&](int k) {
-    const BenchRun& run = runs[k];
-    const SequenceState& seq = sequences.at(run.sequence.name);
-    const std::string rel = "runs/" + run.sequence.name + "/" + run.config.name;
-    const std::string run_dir = options.out_dir + "/" + rel;
-    const std::vector<std::string> argv = RunCommand(run, options.dala_path, seq.folder, run_dir);
-    const nlohmann::json spec = RunSpec(run);
-
-    // Resume: a run with its report and a done marker for the same spec is not rerun.
-    if (!options.force && fs::is_regular_file(run_dir + "/report.json")) {
-      const auto done = ReadJsonFile(run_dir + "/" + kDoneMarker);
-      if (done && done->contains("spec") && done->at("spec") == spec && done->contains("result")) {
-        try {
-          rows[k] = BenchRunResultFromJson(done->at("result"), run_dir + "/" + kDoneMarker);
-          rows[k].index = run.index;
-          skipped[k] = 1;
-          progress.Print(Describe(rows[k]) + "  [done before, skipped]");
-          return;
-        } catch (const Error&) {
-          // A damaged marker: rerun.
-        }
-      }
+    const SequenceState& seq = sequences.at(runs[k].sequence.name);
+    if (!options.force && ReuseDoneRun(runs[k], options.out_dir, &rows[k])) {
+      skipped[k] = 1;
+      progress.Print(Describe(rows[k]) + "  [done before, skipped]");
+      return;
     }
-
-    BenchRunResult& r = rows[k];
-    r.index = run.index;
-    r.sequence = run.sequence.name;
-    r.config = run.config.name;
-    r.estimator = run.config.estimator;
-    r.mode = run.config.mode;
-    r.run_dir = rel;
-    r.command = ShellJoin(argv);
-    try {
-      std::error_code ec;
-      fs::remove_all(run_dir, ec);  // No stale outputs of an earlier attempt.
-      CreateDirectories(run_dir);
-      if (!seq.render_error.empty()) {
-        r.status = kStatusFailed;
-        r.error = "sequence not available: " + seq.render_error;
-      } else {
-        SubprocessOptions sub;
-        sub.log_path = run_dir + "/log.txt";
-        sub.timeout_s = timeout_s;
-        const SubprocessResult child = RunSubprocess(argv, sub);
-        RunSeries series;
-        EvaluateRun(run, child, run_dir, seq.ground_truth, seq.gt_why, &r, &series);
-        WriteJsonFile(run_dir + "/" + kSeriesFile, ToJson(series));
-      }
-      // The done marker last: it is what resume trusts.
-      WriteJsonFile(run_dir + "/" + kDoneMarker, {{"spec", spec}, {"result", ToJson(r)}});
-    } catch (const Error& e) {
-      r.status = kStatusFailed;
-      r.error += (r.error.empty() ? "" : "; ") + std::string(e.what());
-    }
-    progress.Print(Describe(r));
+    ExecuteRun(runs[k], seq, options, timeout_s, &rows[k]);
+    progress.Print(Describe(rows[k]));
   });
 
   BenchSummary summary;
