@@ -52,6 +52,10 @@ std::string SelfPath() {
 
 int RunBenchCommand(const std::vector<std::string>& args) {
   (void)dataset_validator;
+  if (args.empty()) {
+    throw Error() << "usage: dala bench SUITE.yaml --out DIR [...] (the default suite is "
+                  << "benchmarks/default.yaml); see `dala bench --help`";
+  }
   if (FLAGS_out.empty()) {
     throw Error() << "--out DIR is required (the output folder); see `dala bench --help`";
   }
