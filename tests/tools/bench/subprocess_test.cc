@@ -1,4 +1,6 @@
 // Child processes (tools/bench/subprocess.h), the line chart and the CSV of the results.
+#include "tools/bench/subprocess.h"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -10,7 +12,6 @@
 #include "tests/test_util.h"
 #include "tools/bench/line_chart.h"
 #include "tools/bench/report_writer.h"
-#include "tools/bench/subprocess.h"
 
 namespace dala::bench {
 namespace {
