@@ -1,0 +1,360 @@
+// `dala bench` end to end with a fake `dala` (fake_dala.h) standing in for `dala synth` and
+// `dala run`: metrics against the known injected error, failures, resume, --force, shards and
+// merge, the report's plots, and the error messages.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <string>
+
+#include "tests/test_util.h"
+#include "tests/tools/bench/fake_dala.h"
+
+namespace dala {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+struct CliResult {
+  int status = -1;
+  std::string err;
+};
+
+std::string ReadText(const std::string& path) {
+  std::ifstream is(path);
+  return std::string(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
+}
+
+int CountLines(const std::string& path) {
+  std::ifstream is(path);
+  int n = 0;
+  for (std::string line; std::getline(is, line);) ++n;
+  return n;
+}
+
+class BenchCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    fake_ = dir_ / "fake_dala.sh";
+    std::ofstream(fake_) << testing::kFakeDalaScript;
+    fs::permissions(fake_, fs::perms::owner_all);
+    suite_ = dir_ / "suite.yaml";
+    std::ofstream(suite_) << "sequences:\n"
+                             "  - {name: square_a, preset: rover_loop, frames: 80, seed: 1}\n"
+                             "  - {name: square_b, preset: flight, frames: 80, seed: 2}\n"
+                             "configurations:\n"
+                             "  - {name: ba-stereo, estimator: ba, mode: stereo}\n"
+                             "  - {name: ekf-stereo, estimator: ekf, mode: stereo}\n"
+                             "  - {name: ekf-mono, estimator: ekf, mode: mono}\n"
+                             "  - {name: ba-mono, estimator: ba, mode: mono}\n"
+                             "  - {name: fails, estimator: ekf, mode: stereo, "
+                             "set: [\"fake.fail=1\"]}\n"
+                             "  - {name: crashes, estimator: ba, mode: stereo, "
+                             "set: [\"fake.crash=1\"]}\n";
+  }
+
+  CliResult Bench(const std::string& args) {
+    const std::string err = dir_ / "stderr.txt";
+    const std::string cmd = std::string(DALA_BINARY) + " bench " + args + " 2>" + err;
+    const int status = std::system(cmd.c_str());
+    CliResult r;
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.err = ReadText(err);
+    return r;
+  }
+  CliResult BenchSuite(const std::string& out, const std::string& extra = "") {
+    return Bench(suite_ + " --out " + out + " --dala " + fake_ + " " + extra);
+  }
+
+  static nlohmann::json Results(const std::string& out) {
+    return nlohmann::json::parse(ReadText(out + "/results.json"));
+  }
+  static std::map<std::string, nlohmann::json> ByKey(const nlohmann::json& results) {
+    std::map<std::string, nlohmann::json> runs;
+    for (const auto& r : results.at("runs")) {
+      runs[r.at("sequence").get<std::string>() + "/" + r.at("config").get<std::string>()] = r;
+    }
+    return runs;
+  }
+
+  testing::TempDir dir_;
+  std::string fake_, suite_;
+};
+
+TEST_F(BenchCli, RecordsMetricsOfEveryRunAndItsFailures) {
+  const std::string out = dir_ / "out";
+  const CliResult r = BenchSuite(out, "--jobs 3");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("[12/12]"));
+  EXPECT_THAT(r.err, HasSubstr("square_a/crashes  crashed"));
+
+  const nlohmann::json results = Results(out);
+  EXPECT_EQ(results.at("runs_total").get<int>(), 12);
+  ASSERT_EQ(results.at("runs").size(), 12u);
+  // Sorted run order whatever the completion order.
+  for (size_t k = 0; k < 12; ++k) EXPECT_EQ(results["runs"][k]["index"].get<size_t>(), k);
+  const auto runs = ByKey(results);
+  for (const char* seq : {"square_a", "square_b"}) {
+    const std::string s = seq;
+    for (const char* cfg : {"ba-stereo", "ekf-stereo"}) {
+      const nlohmann::json& run = runs.at(s + "/" + cfg);
+      EXPECT_EQ(run["status"], "ok") << run.dump(1);
+      EXPECT_EQ(run["alignment"], "se3");
+      // The injected +-0.1 m offset, invisible to the SE(3) alignment.
+      EXPECT_NEAR(run["ate_rmse"].get<double>(), 0.1, 1e-6);
+      EXPECT_NEAR(run["ate_max"].get<double>(), 0.1, 1e-6);
+      EXPECT_NEAR(run["scale"].get<double>(), 1.0, 1e-12);
+      // 1 frame: |s_i+1 - s_i| d = 0.2 m on 40 of the 79 pairs, 0 on the others.
+      EXPECT_NEAR(run["rpe_trans"].get<double>(), 0.2 * std::sqrt(40.0 / 79.0), 1e-6);
+      // 10 frames: s alternates between +1 and -1 every 10 frames: 0.2 m on every pair.
+      EXPECT_NEAR(run["rpe10_trans"].get<double>(), 0.2, 1e-6);
+      EXPECT_NEAR(run["path_length_m"].get<double>(), 158.0, 1e-6);
+      EXPECT_TRUE(run["t_err_percent"].is_number());  // 158 m: 100 m segments exist.
+      // Times 10 + (i % 10) ms: median 14.5, p95 and max 19 (numpy percentile).
+      EXPECT_DOUBLE_EQ(run["ms_median"].get<double>(), 14.5);
+      EXPECT_DOUBLE_EQ(run["ms_p95"].get<double>(), 19.0);
+      EXPECT_DOUBLE_EQ(run["ms_max"].get<double>(), 19.0);
+      EXPECT_EQ(run["landmarks"], 4321);
+      EXPECT_EQ(run["keyframes"], 16);
+      EXPECT_EQ(run["tracking_failures"], 1);
+      EXPECT_EQ(run["frames"], 80);
+      EXPECT_EQ(run["pairs"], 80);
+      EXPECT_GT(run["peak_rss_mb"].get<double>(), 0.5);
+      EXPECT_GT(run["wall_s"].get<double>(), 0.0);
+      EXPECT_EQ(run["error"], "");
+      EXPECT_TRUE(fs::exists(out + "/" + run["plot_trajectory"].get<std::string>()));
+      EXPECT_TRUE(fs::exists(out + "/" + run["plot_timing"].get<std::string>()));
+      EXPECT_TRUE(fs::exists(out + "/runs/" + s + "/" + cfg + "/log.txt"));
+    }
+    const nlohmann::json& mono = runs.at(s + "/ekf-mono");
+    EXPECT_EQ(mono["status"], "ok");
+    EXPECT_EQ(mono["alignment"], "sim3");
+    EXPECT_LT(mono["ate_rmse"].get<double>(), 1e-6);  // Doubled positions: Sim(3) removes it.
+    EXPECT_NEAR(mono["scale"].get<double>(), 0.5, 1e-9);
+    EXPECT_LT(mono["t_err_percent"].get<double>(), 1e-6);  // On the scaled estimate.
+    EXPECT_EQ(mono["estimator"], "ekf");
+    EXPECT_EQ(mono["mode"], "mono");
+
+    const nlohmann::json& fails = runs.at(s + "/fails");
+    EXPECT_EQ(fails["status"], "failed");
+    EXPECT_EQ(fails["exit_code"], 1);
+    EXPECT_THAT(fails["error"].get<std::string>(), HasSubstr("the fake estimator diverged"));
+    EXPECT_TRUE(fails["ate_rmse"].is_null());
+    const nlohmann::json& crash = runs.at(s + "/crashes");
+    EXPECT_EQ(crash["status"], "crashed");
+    EXPECT_EQ(crash["signal"], 11);
+    EXPECT_THAT(crash["error"].get<std::string>(), HasSubstr("signal 11"));
+    const nlohmann::json& unsupported = runs.at(s + "/ba-mono");
+    EXPECT_EQ(unsupported["status"], "unsupported");
+    EXPECT_THAT(unsupported["error"].get<std::string>(), HasSubstr("is not supported"));
+  }
+  // Each preset rendered once.
+  EXPECT_EQ(CountLines(out + "/synth_calls.txt"), 2);
+  EXPECT_TRUE(fs::exists(out + "/sequences/square_a/poses.txt"));
+
+  // CSV: header + one line per run (the errors span lines inside quotes, so count records by
+  // the sequence name at a line start).
+  const std::string csv = ReadText(out + "/results.csv");
+  EXPECT_EQ(csv.rfind("sequence,config,estimator,mode,status,ate_rmse,", 0), 0u);
+  EXPECT_THAT(csv, HasSubstr("square_a,ba-stereo,ba,stereo,ok,0.1000,"));
+  const std::string md = ReadText(out + "/results.md");
+  EXPECT_THAT(md, HasSubstr("| sequence | ba-mono | ba-stereo | crashes | ekf-mono | ekf-stereo "
+                            "| fails |"));
+  EXPECT_THAT(md, HasSubstr("| square_a | unsupported | 0.1000 | crashed | **0.0000** | 0.1000 "
+                            "| failed |"));
+
+  // The HTML references only existing PNGs, among them every run's plots.
+  const std::string html = ReadText(out + "/report.html");
+  const std::regex src("src=\"([^\"]+)\"");
+  std::set<std::string> pngs;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), src); it != std::sregex_iterator();
+       ++it) {
+    const std::string rel = (*it)[1];
+    EXPECT_TRUE(fs::is_regular_file(out + "/" + rel)) << rel;
+    EXPECT_EQ(rel.substr(rel.size() - 4), ".png");
+    pngs.insert(rel);
+  }
+  EXPECT_EQ(pngs.size(), 6u * 2u + 2u * 2u);  // 6 ok runs x 2 plots + 2 sequences x 2.
+  EXPECT_TRUE(pngs.count("runs/square_b/ekf-mono/eval.png"));
+  EXPECT_TRUE(pngs.count("plots/square_a_ate.png"));
+  EXPECT_THAT(html, HasSubstr("the fake estimator diverged"));
+}
+
+TEST_F(BenchCli, ResumesFinishedRunsAndForceRerunsThem) {
+  const std::string out = dir_ / "out";
+  ASSERT_EQ(BenchSuite(out, "--jobs 2").status, 0);
+  EXPECT_EQ(CountLines(out + "/run_calls.txt"), 12);
+  const std::string marker = out + "/runs/square_a/ba-stereo/bench_done.json";
+  ASSERT_TRUE(fs::exists(marker));
+  const auto stamp = fs::last_write_time(marker);
+  const nlohmann::json first = Results(out);
+
+  // Again: the 6 ok runs are reused; the 6 that did not finish (fails, crashes, ba-mono) rerun.
+  const CliResult again = BenchSuite(out, "--jobs 2");
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_EQ(CountLines(out + "/run_calls.txt"), 12 + 6);
+  EXPECT_EQ(fs::last_write_time(marker), stamp);
+  EXPECT_THAT(again.err, HasSubstr("square_a/ba-stereo  ok"));
+  EXPECT_THAT(again.err, HasSubstr("[done before, skipped]"));
+  EXPECT_THAT(again.err, HasSubstr("(6 reused)"));
+  EXPECT_EQ(CountLines(out + "/synth_calls.txt"), 2);  // Sequences not rendered again.
+  const auto a = ByKey(first), b = ByKey(Results(out));
+  for (const auto& [key, run] : a) {
+    if (run["status"] == "ok") {
+      EXPECT_EQ(run, b.at(key)) << key;  // Reused verbatim.
+    }
+  }
+
+  // A changed configuration is not reused.
+  std::ofstream(suite_, std::ios::app) << "  - {name: extra, estimator: ekf, mode: stereo}\n";
+  ASSERT_EQ(BenchSuite(out).status, 0);
+  EXPECT_EQ(CountLines(out + "/run_calls.txt"), 18 + 2 + 6);  // extra x 2 + the not-ok again.
+
+  ASSERT_EQ(BenchSuite(out, "--force").status, 0);
+  EXPECT_EQ(CountLines(out + "/run_calls.txt"), 26 + 14);
+  EXPECT_NE(fs::last_write_time(marker), stamp);
+}
+
+TEST_F(BenchCli, ShardsPartitionTheRunsAndMergeReproducesTheWhole) {
+  const std::string whole = dir_ / "whole";
+  ASSERT_EQ(BenchSuite(whole, "--jobs 2").status, 0);
+  std::set<std::string> seen;
+  std::string dirs;
+  for (int i = 0; i < 3; ++i) {
+    const std::string out = dir_ / ("part" + std::to_string(i));
+    const CliResult r = BenchSuite(out, "--shard " + std::to_string(i) + "/3");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json part = Results(out);
+    EXPECT_EQ(part["shard"], std::to_string(i) + "/3");
+    EXPECT_EQ(part["runs"].size(), 4u);
+    for (const auto& [key, run] : ByKey(part)) {
+      EXPECT_EQ(run["index"].get<int>() % 3, i);
+      EXPECT_TRUE(seen.insert(key).second) << key << " in two shards";
+    }
+    dirs += " " + out;
+  }
+  EXPECT_EQ(seen.size(), 12u);
+
+  const std::string merged = dir_ / "merged";
+  const CliResult m = Bench("merge" + dirs + " --out " + merged);
+  ASSERT_EQ(m.status, 0) << m.err;
+  const nlohmann::json a = Results(whole), b = Results(merged);
+  ASSERT_EQ(a["runs"].size(), b["runs"].size());
+  for (size_t k = 0; k < a["runs"].size(); ++k) {
+    nlohmann::json x = a["runs"][k], y = b["runs"][k];
+    for (const char* volatile_key : {"wall_s", "peak_rss_mb", "command", "error"}) {
+      x.erase(volatile_key);  // Time, memory and paths differ between two executions.
+      y.erase(volatile_key);
+    }
+    EXPECT_EQ(x, y) << k;
+  }
+  // The merged report's plots were copied along.
+  const std::string html = ReadText(merged + "/report.html");
+  EXPECT_THAT(html, HasSubstr("src=\"runs/square_b/ba-stereo/eval.png\""));
+  EXPECT_TRUE(fs::exists(merged + "/runs/square_b/ba-stereo/eval.png"));
+  EXPECT_TRUE(fs::exists(merged + "/plots/square_b_ate.png"));
+  EXPECT_EQ(ReadText(whole + "/results.md").substr(0, 200).find("shard"), std::string::npos);
+
+  // A run in two folders is refused.
+  const CliResult twice = Bench("merge " + whole + dirs + " --out " + (dir_ / "bad"));
+  EXPECT_EQ(twice.status, 2);
+  EXPECT_THAT(twice.err, HasSubstr("is in both"));
+}
+
+TEST_F(BenchCli, KillsARunAfterTheTimeout) {
+  std::ofstream(suite_) << "sequences:\n  - {name: s, preset: fast, frames: 8}\n"
+                           "configurations:\n"
+                           "  - {name: slow, estimator: ba, mode: stereo, "
+                           "set: [\"fake.sleep=20\"]}\n"
+                           "  - {name: quick, estimator: ba, mode: stereo}\n";
+  const std::string out = dir_ / "out";
+  const CliResult r = BenchSuite(out, "--run_timeout 0.3 --jobs 2");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto runs = ByKey(Results(out));
+  EXPECT_EQ(runs.at("s/slow")["status"], "timeout");
+  EXPECT_LT(runs.at("s/slow")["wall_s"].get<double>(), 5.0);
+  EXPECT_EQ(runs.at("s/quick")["status"], "ok");
+}
+
+TEST_F(BenchCli, ASequenceThatCannotBeRenderedFailsItsRunsOnly) {
+  std::ofstream(suite_) << "sequences:\n  - {name: good, preset: fast, frames: 8}\n"
+                           "  - {name: bad, preset: broken, frames: 8}\n"
+                           "configurations:\n  - {name: ba-stereo, estimator: ba, mode: stereo}\n";
+  const std::string out = dir_ / "out";
+  const CliResult r = BenchSuite(out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("sequence bad: FAILED"));
+  const auto runs = ByKey(Results(out));
+  EXPECT_EQ(runs.at("good/ba-stereo")["status"], "ok");
+  EXPECT_EQ(runs.at("bad/ba-stereo")["status"], "failed");
+  EXPECT_THAT(runs.at("bad/ba-stereo")["error"].get<std::string>(),
+              HasSubstr("unknown preset 'broken'"));
+  EXPECT_FALSE(fs::exists(out + "/sequences/bad"));  // Nothing half-rendered left as done.
+}
+
+TEST_F(BenchCli, AddsDatasetFoldersFromTheCommandLine) {
+  // A KITTI-like folder with ground truth, as `dala synth` writes (made by the fake).
+  const std::string data = dir_ / "mydata";
+  fs::create_directories(dir_ / "gen/sequences");
+  const std::string synth =
+      fake_ + " synth --out " + (dir_ / "gen/sequences/x") + " --frames 40 >/dev/null";
+  ASSERT_EQ(std::system(synth.c_str()), 0);
+  fs::rename(dir_ / "gen/sequences/x", data);
+  std::ofstream(suite_) << "sequences:\n  - {name: s, preset: fast, frames: 40}\n"
+                           "configurations:\n  - {name: ba-stereo, estimator: ba, mode: stereo}\n";
+  const std::string out = dir_ / "out";
+  const CliResult r = BenchSuite(out, "--dataset " + data + " --dataset " + data + "/");
+  EXPECT_EQ(r.status, 2);  // The same folder twice: the name is taken.
+  EXPECT_THAT(r.err, HasSubstr("a sequence named 'mydata' is already in the suite"));
+  const CliResult ok = BenchSuite(out, "--dataset " + data);
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  const auto runs = ByKey(Results(out));
+  ASSERT_TRUE(runs.count("mydata/ba-stereo"));
+  EXPECT_NEAR(runs.at("mydata/ba-stereo")["ate_rmse"].get<double>(), 0.1, 1e-6);
+  EXPECT_THAT(runs.at("mydata/ba-stereo")["command"].get<std::string>(),
+              HasSubstr(" run " + data + " --out "));
+}
+
+TEST_F(BenchCli, ClearErrors) {
+  const std::string out = dir_ / "out";
+  std::ofstream(dir_ / "bad.yaml") << "sequences:\n  - {name: a, preset: fast}\n"
+                                      "configurations:\n  - {name: c, estimator: orb, "
+                                      "mode: stereo}\n";
+  struct Case {
+    std::string args;
+    std::string expected;
+  };
+  std::ofstream(dir_ / "a_file") << "x";
+  const std::vector<Case> cases = {
+      {(dir_ / "bad.yaml") + " --out " + out + " --dala " + fake_,
+       "bad.yaml: configurations[0].estimator: unknown estimator 'orb'; expected ba or ekf"},
+      {suite_ + " --dala " + fake_, "--out DIR is required"},
+      {suite_ + " --out " + (dir_ / "a_file/sub") + " --dala " + fake_,
+       "cannot create the output folder"},
+      {suite_ + " --out " + out + " --dala " + (dir_ / "nope"), "not an executable file"},
+      {suite_ + " --out " + out + " --dala " + fake_ + " --dataset " + (dir_ / "nowhere"),
+       "the dataset folder does not exist"},
+      {suite_ + " --out " + out + " --dala " + fake_ + " --shard 3/3", "expected 0 <= i < n"},
+      {suite_ + " --out " + out + " --dala " + fake_ + " --jobs 0", "--jobs must be >= 1"},
+      {(dir_ / "missing.yaml") + " --out " + out, "the suite file does not exist"},
+      {"merge " + (dir_ / "nothing") + " --out " + out, "results.json: missing"},
+  };
+  for (const Case& c : cases) {
+    const CliResult r = Bench(c.args);
+    EXPECT_EQ(r.status, 2) << c.args << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr(c.expected)) << c.args;
+  }
+}
+
+}  // namespace
+}  // namespace dala

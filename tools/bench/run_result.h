@@ -1,0 +1,65 @@
+#ifndef DALA_TOOLS_BENCH_RUN_RESULT_H_
+#define DALA_TOOLS_BENCH_RUN_RESULT_H_
+
+// What `dala bench` records of one run (one row of results.json / .csv / .md). Metrics that do
+// not exist for a run (no ground truth, a failed run, a path too short for KITTI segments) are
+// empty optionals, written as JSON null and as empty CSV cells.
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+namespace dala::bench {
+
+// ok: the run finished and was evaluated; failed: non-zero exit (or no output); crashed: killed
+// by a signal; timeout: killed after the suite's timeout_s; unsupported: `dala run` rejected
+// the estimator/mode combination (exit 2 saying "not supported"/"unsupported").
+inline constexpr const char* kStatusOk = "ok";
+inline constexpr const char* kStatusFailed = "failed";
+inline constexpr const char* kStatusCrashed = "crashed";
+inline constexpr const char* kStatusTimeout = "timeout";
+inline constexpr const char* kStatusUnsupported = "unsupported";
+
+struct BenchRunResult {
+  int index = 0;          // In the full sorted run list.
+  std::string sequence;   // Sequence name.
+  std::string config;     // Configuration name.
+  std::string estimator;  // "ba" | "ekf".
+  std::string mode;       // "stereo" | "mono".
+  std::string status;     // See above.
+  std::string error;      // Why a run is not ok, or why a metric is missing; empty otherwise.
+  std::string command;    // The `dala run` command line.
+  std::string run_dir;    // Relative to the bench output folder: runs/SEQ/CONFIG.
+  std::optional<int> exit_code;
+  std::optional<int> signal;
+  double wall_s = 0.0;
+  double peak_rss_mb = 0.0;
+
+  // From report.json.
+  std::optional<int> frames;
+  std::optional<double> fps;
+  std::optional<double> ms_median, ms_p95, ms_max;  // Per-frame "total" time.
+  std::optional<int> landmarks, keyframes, tracking_failures;
+
+  // Re-evaluated by the harness (core/eval Evaluate), see docs/benchmarking.md.
+  std::string alignment;  // "se3" (stereo) | "sim3" (mono).
+  std::optional<int> pairs;
+  std::optional<double> path_length_m;
+  std::optional<double> ate_rmse, ate_mean, ate_median, ate_max;
+  std::optional<double> scale;
+  std::optional<double> rpe_trans, rpe_rot_deg;             // RPE over 1 frame: RMSE, m and deg.
+  std::optional<double> rpe10_trans, rpe10_rot_deg;         // RPE over 10 frames.
+  std::optional<double> t_err_percent, r_err_deg_per_100m;  // KITTI segments.
+
+  // Plots, relative to the bench output folder; empty when not drawn.
+  std::string plot_trajectory;  // PlotEvaluation: top view over ground truth + ATE along path.
+  std::string plot_timing;      // Per-frame time.
+};
+
+nlohmann::json ToJson(const BenchRunResult& r);
+// Throws dala::Error naming `where` on a missing or mistyped key.
+BenchRunResult BenchRunResultFromJson(const nlohmann::json& j, const std::string& where);
+
+}  // namespace dala::bench
+
+#endif  // DALA_TOOLS_BENCH_RUN_RESULT_H_
