@@ -86,7 +86,8 @@ void BM_StereoEkfFrame(benchmark::State& state) {
   StereoEkfEstimator ekf(rig, options);
   std::mt19937 rng(2);
   int k = 0;
-  for (; ekf.state().num_landmarks() < n && k < 50; ++k) ekf.Add(MakeFrame(rig, points, k, true, &rng));
+  for (; ekf.state().num_landmarks() < n && k < 50; ++k)
+    ekf.Add(MakeFrame(rig, points, k, true, &rng));
   const FrameMeasurement next = MakeFrame(rig, points, k, true, &rng);
   for (auto _ : state) {
     state.PauseTiming();

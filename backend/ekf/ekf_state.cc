@@ -49,8 +49,7 @@ int EkfState::AddLandmarkFromCamera(LandmarkId id, const Eigen::Vector3d& p_c,
   return AddLandmark(id, T_w_c_ * p_c, R * cov_p_c * R.transpose(), J_pose);
 }
 
-int EkfState::AddLandmark(LandmarkId id, const Eigen::Vector3d& p_w,
-                          const Eigen::Matrix3d& cov_p_w,
+int EkfState::AddLandmark(LandmarkId id, const Eigen::Vector3d& p_w, const Eigen::Matrix3d& cov_p_w,
                           const Eigen::Matrix<double, 3, 6>& J_pose) {
   CHECK(!full()) << "EkfState: the state is full (" << max_landmarks_ << " landmarks)";
   CHECK_EQ(IndexOf(id), -1) << "EkfState: landmark " << id << " is already in the state";
@@ -105,8 +104,7 @@ Eigen::MatrixXd EkfState::InnovationCovariance(const EkfUpdateBlock& b) const {
   if (l >= 0) {
     const int o = 6 + 3 * l;
     const Eigen::MatrixXd cross = b.H_pose * P_.block(0, o, 6, 3) * b.H_landmark.transpose();
-    S += cross + cross.transpose() +
-         b.H_landmark * P_.block<3, 3>(o, o) * b.H_landmark.transpose();
+    S += cross + cross.transpose() + b.H_landmark * P_.block<3, 3>(o, o) * b.H_landmark.transpose();
   }
   return S;
 }

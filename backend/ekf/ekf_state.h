@@ -30,10 +30,9 @@
 //   J_pose = [-R [p_c]x, R],  J_pc = R,
 //   P_ll = J_pose P_pp J_pose^T + R C R^T,  P_lx = J_pose P_px  (full cross-covariance).
 
+#include <Eigen/Core>
 #include <unordered_map>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/geometry.h"
 #include "core/types.h"

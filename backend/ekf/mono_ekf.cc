@@ -64,10 +64,12 @@ MonoEkfEstimator::MonoEkfEstimator(const PinholeCamera& camera, const MonoEkfOpt
 }
 
 int MonoEkfEstimator::Zone(const Eigen::Vector2d& uv) const {
-  const int col = std::clamp(static_cast<int>(std::floor(uv.x() / camera_.width * options_.grid_cols)),
-                             0, options_.grid_cols - 1);
-  const int row = std::clamp(static_cast<int>(std::floor(uv.y() / camera_.height * options_.grid_rows)),
-                             0, options_.grid_rows - 1);
+  const int col =
+      std::clamp(static_cast<int>(std::floor(uv.x() / camera_.width * options_.grid_cols)), 0,
+                 options_.grid_cols - 1);
+  const int row =
+      std::clamp(static_cast<int>(std::floor(uv.y() / camera_.height * options_.grid_rows)), 0,
+                 options_.grid_rows - 1);
   return row * options_.grid_cols + col;
 }
 
@@ -347,7 +349,8 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   auto gated = [&](EkfUpdateBlock* b) {
     const Eigen::MatrixXd S = state_.InnovationCovariance(*b);
     const Eigen::LLT<Eigen::MatrixXd> llt(S);
-    return llt.info() == Eigen::Success && b->residual.dot(llt.solve(b->residual)) < options_.gate_chi2;
+    return llt.info() == Eigen::Success &&
+           b->residual.dot(llt.solve(b->residual)) < options_.gate_chi2;
   };
   for (const FeatureObservation& obs : m.observations) {
     const double s2 = obs.sigma_px * obs.sigma_px;
@@ -423,7 +426,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   for (auto it = directions_.begin(); it != directions_.end();) {
     const bool stale = frame_index_ - it->second.last_seen > options_.pose_buffer_size;
     it = (it->second.gate_failures >= options_.max_gate_failures || stale) ? directions_.erase(it)
-                                                                          : std::next(it);
+                                                                           : std::next(it);
   }
 
   // Pose buffer for the candidates.
@@ -446,8 +449,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
     Candidate& c = it->second;
     const auto s = seen.find(it->first);
     bool keep = true;
-    if (pose_buffer_.count(c.first_frame) == 0 ||
-        frame_index_ - c.last_seen_frame > 1) {
+    if (pose_buffer_.count(c.first_frame) == 0 || frame_index_ - c.last_seen_frame > 1) {
       keep = false;  // Out of the pose buffer, or the track was lost.
     } else if (s != seen.end()) {
       const FeatureObservation& obs = *s->second;
@@ -457,7 +459,8 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
           (obs.uv - c.last_used_uv).squaredNorm() / (2 * obs.sigma_px * obs.sigma_px);
       if (motion2 > options_.min_image_motion_chi2) keep = UpdateCandidate(it->first, &c, obs);
     }
-    if (keep && c.farthest_alive && frame_index_ - c.first_frame >= options_.infinity_after_frames) {
+    if (keep && c.farthest_alive &&
+        frame_index_ - c.first_frame >= options_.infinity_after_frames) {
       // The parallax never grew: a point at infinity, kept as a direction.
       if (static_cast<int>(directions_.size()) < options_.max_directions) {
         directions_[it->first] = Direction{c.d_w, c.cov_d_w, frame_index_, 0};
@@ -495,7 +498,8 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   }
 
   stats_.candidates = static_cast<int>(candidates_.size());
-  for (const auto& [id, c] : candidates_) stats_.hypotheses += static_cast<int>(c.hypotheses.size());
+  for (const auto& [id, c] : candidates_)
+    stats_.hypotheses += static_cast<int>(c.hypotheses.size());
   stats_.directions = static_cast<int>(directions_.size());
   out.T_w_c = state_.T_w_c();
   out.landmarks_in_state = state_.num_landmarks();

@@ -48,14 +48,14 @@
 //   alone, z_j = pi(T_c_j^-1 p_c), noise s^2 I + H_T Sigma_cj H_T^T, where Sigma_cj is the
 //   uncertainty of the relative pose T_c_j accumulated from the motion inputs between j and c
 //   (RelativeCovariance), counted n times for n replayed observations since these relative-pose
-//   errors share motion segments (covariance intersection). The replay is iterated to convergence (Gauss-Newton: one EKF pass
-//   linearised one alpha-sigma off in depth is overconfident); a refined point whose cost exceeds
-//   the chi2 99.9 % region is dropped. The point (p_c, C) is then augmented like a stereo point
-//   (ekf_state.h) with the full cross-covariance to the current pose. Anchoring it at the current
-//   pose with a relative covariance matters: expressing the point in the world with the absolute
-//   pose uncertainties of frames k..j and then correlating it with the current pose gives a joint
-//   covariance that is not conservative (the pose NEES diverged within 20 frames).
-//   If no hypothesis remains the feature is dropped (and its id not retried).
+//   errors share motion segments (covariance intersection). The replay is iterated to convergence
+//   (Gauss-Newton: one EKF pass linearised one alpha-sigma off in depth is overconfident); a
+//   refined point whose cost exceeds the chi2 99.9 % region is dropped. The point (p_c, C) is then
+//   augmented like a stereo point (ekf_state.h) with the full cross-covariance to the current pose.
+//   Anchoring it at the current pose with a relative covariance matters: expressing the point in
+//   the world with the absolute pose uncertainties of frames k..j and then correlating it with the
+//   current pose gives a joint covariance that is not conservative (the pose NEES diverged within
+//   20 frames). If no hypothesis remains the feature is dropped (and its id not retried).
 // Points at infinity: when the farthest hypothesis is still alive after `infinity_after_frames`
 //   frames (the parallax never grew), the feature becomes a direction landmark: a unit direction
 //   d_w with covariance Sigma_d, outside the state, observed as z = pi(R_w_c^T d_w) with
@@ -89,14 +89,14 @@ struct MonoEkfOptions {
   // beta = 1.67, 12 hypotheses over 0.5..100 m).
   double alpha = 0.25;
   double k_sigma = 1.0;
-  double prune_chi2 = 20.0;               // Hypothesis dropped above this squared Mahalanobis.
-  double sprt_false_alarm = 0.01;         // a_FA.
-  double sprt_missed_detection = 0.05;    // a_MD.
-  double min_image_motion_chi2 = 8.0;     // Observation used only above this image motion.
-  int pose_buffer_size = 100;             // Past poses kept for the replay (frames).
-  int max_candidates = 150;               // Features being initialised at once.
-  int infinity_after_frames = 40;         // Far hypothesis alive that long: point at infinity.
-  int max_directions = 60;                // Direction landmarks (points at infinity) kept.
+  double prune_chi2 = 20.0;             // Hypothesis dropped above this squared Mahalanobis.
+  double sprt_false_alarm = 0.01;       // a_FA.
+  double sprt_missed_detection = 0.05;  // a_MD.
+  double min_image_motion_chi2 = 8.0;   // Observation used only above this image motion.
+  int pose_buffer_size = 100;           // Past poses kept for the replay (frames).
+  int max_candidates = 150;             // Features being initialised at once.
+  int infinity_after_frames = 40;       // Far hypothesis alive that long: point at infinity.
+  int max_directions = 60;              // Direction landmarks (points at infinity) kept.
   // Map management (as StereoEkfOptions).
   int grid_cols = 4;
   int grid_rows = 4;
@@ -115,13 +115,13 @@ struct MonoEkfOptions {
 std::vector<std::pair<double, double>> GaussianSumDepths(const MonoEkfOptions& options);
 
 struct MonoEkfFrameStats {
-  int updated = 0;          // Observations applied in the EKF (points and directions).
+  int updated = 0;  // Observations applied in the EKF (points and directions).
   int gated_out = 0;
-  int candidates = 0;       // Features being initialised after this frame.
-  int hypotheses = 0;       // Alive hypotheses over all candidates.
-  int inserted = 0;         // Landmarks inserted into the state this frame.
-  int dropped = 0;          // Candidates with no hypothesis left.
-  int directions = 0;       // Direction landmarks after this frame.
+  int candidates = 0;  // Features being initialised after this frame.
+  int hypotheses = 0;  // Alive hypotheses over all candidates.
+  int inserted = 0;    // Landmarks inserted into the state this frame.
+  int dropped = 0;     // Candidates with no hypothesis left.
+  int directions = 0;  // Direction landmarks after this frame.
 };
 
 class MonoEkfEstimator : public Estimator {
@@ -158,10 +158,10 @@ class MonoEkfEstimator : public Estimator {
     int last_used_frame = 0;
     int last_seen_frame = 0;
     Eigen::Vector2d last_used_uv;
-    Eigen::Vector3d b_c;        // Unit ray in the first camera, and its covariance.
+    Eigen::Vector3d b_c;  // Unit ray in the first camera, and its covariance.
     Eigen::Matrix3d cov_b_c;
-    Eigen::Vector3d d_w;        // Unit ray in the world at the first observation.
-    Eigen::Matrix3d cov_d_w;    // Its covariance (pixel noise and first-pose rotation).
+    Eigen::Vector3d d_w;                 // Unit ray in the world at the first observation.
+    Eigen::Matrix3d cov_d_w;             // Its covariance (pixel noise and first-pose rotation).
     std::vector<Hypothesis> hypotheses;  // Ordered by depth; the last is the farthest.
     bool farthest_alive = true;
     std::vector<StoredObservation> observations;  // Used ones, the first included.

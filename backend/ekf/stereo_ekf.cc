@@ -3,7 +3,6 @@
 #include <glog/logging.h>
 
 #include <Eigen/Cholesky>
-
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -24,6 +23,7 @@ bool StereoEkfOptions::IsValid(std::string* why) const {
   if (!(gate_chi2 > 0) || !(loop_gate_chi2 > 0)) os << "gate_chi2 and loop_gate_chi2 must be > 0; ";
   if (loop_min_gap_frames < 2) os << "loop_min_gap_frames must be >= 2; ";
   if (max_gate_failures < 1) os << "max_gate_failures must be >= 1; ";
+  if (max_batch_observations < 1) os << "max_batch_observations must be >= 1; ";
   if (evict_unseen_frames < 1) os << "evict_unseen_frames must be >= 1; ";
   if (!(lost_rotation_sigma >= 0) || !(lost_translation_sigma >= 0)) {
     os << "lost_rotation_sigma and lost_translation_sigma must be >= 0; ";
@@ -41,10 +41,12 @@ StereoEkfEstimator::StereoEkfEstimator(const StereoRig& rig, const StereoEkfOpti
 }
 
 int StereoEkfEstimator::Zone(const Eigen::Vector2d& uv) const {
-  const int col = std::clamp(static_cast<int>(std::floor(uv.x() / rig_.left.width * options_.grid_cols)),
-                             0, options_.grid_cols - 1);
-  const int row = std::clamp(static_cast<int>(std::floor(uv.y() / rig_.left.height * options_.grid_rows)),
-                             0, options_.grid_rows - 1);
+  const int col =
+      std::clamp(static_cast<int>(std::floor(uv.x() / rig_.left.width * options_.grid_cols)), 0,
+                 options_.grid_cols - 1);
+  const int row =
+      std::clamp(static_cast<int>(std::floor(uv.y() / rig_.left.height * options_.grid_rows)), 0,
+                 options_.grid_rows - 1);
   return row * options_.grid_cols + col;
 }
 
@@ -102,8 +104,7 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
     if (ok) {
       const Eigen::MatrixXd S = state_.InnovationCovariance(*block);
       const Eigen::LLT<Eigen::MatrixXd> llt(S);
-      ok = llt.info() == Eigen::Success &&
-           block->residual.dot(llt.solve(block->residual)) < chi2;
+      ok = llt.info() == Eigen::Success && block->residual.dot(llt.solve(block->residual)) < chi2;
     }
     if (ok) {
       info.last_seen = frame_index_;
@@ -123,13 +124,25 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
       ++stats_.loop_updates;
     }
   }
-  std::vector<EkfUpdateBlock> blocks;
-  blocks.reserve(regular_obs.size());
+  // Gated at the prior, then applied in batches of max_batch_observations, each relinearised at
+  // the state corrected by the previous batches (the cost of one batch of m rows is
+  // O(n m^2 + n^2 m): small batches avoid the n m^2 term of one huge batch).
+  std::vector<const FeatureObservation*> accepted;
   for (const FeatureObservation* obs : regular_obs) {
     EkfUpdateBlock block;
-    if (gate(*obs, options_.gate_chi2, &block)) blocks.push_back(std::move(block));
+    if (gate(*obs, options_.gate_chi2, &block)) accepted.push_back(obs);
   }
-  if (!state_.Update(blocks)) LOG(WARNING) << "StereoEkf: singular innovation, update skipped";
+  for (size_t begin = 0; begin < accepted.size(); begin += options_.max_batch_observations) {
+    const size_t end = std::min(accepted.size(), begin + options_.max_batch_observations);
+    std::vector<EkfUpdateBlock> blocks;
+    for (size_t k = begin; k < end; ++k) {
+      EkfUpdateBlock block;
+      if (MakeBlock(state_.IndexOf(accepted[k]->landmark), *accepted[k], &block)) {
+        blocks.push_back(std::move(block));
+      }
+    }
+    if (!state_.Update(blocks)) LOG(WARNING) << "StereoEkf: singular innovation, batch skipped";
+  }
   out.loop_closed = stats_.loop_updates > 0;
 
   // Removal of unreliable landmarks.
@@ -164,7 +177,8 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
     auto& c = candidates[z];
     std::sort(c.begin(), c.end(), [](const FeatureObservation* a, const FeatureObservation* b) {
       if (a->track_length != b->track_length) return a->track_length > b->track_length;
-      if (a->cov_p_c0.trace() != b->cov_p_c0.trace()) return a->cov_p_c0.trace() < b->cov_p_c0.trace();
+      if (a->cov_p_c0.trace() != b->cov_p_c0.trace())
+        return a->cov_p_c0.trace() < b->cov_p_c0.trace();
       return a->landmark < b->landmark;
     });
     const int n = std::min<int>({static_cast<int>(c.size()), options_.new_per_zone_per_frame,

@@ -15,7 +15,7 @@
 //     persistent landmark ids): z = (u, v, d = u - u_right), h = ProjectStereo(T_w_c^-1 p_w),
 //     R = s^2 [1 0 1; 0 1 0; 1 0 2] (u, v, u_right independent, s = sigma_px). Each observation is
 //     gated alone with its innovation r^T S^-1 r < chi2_3(99 %) = 11.34, then the gated ones are
-//     applied in one batched, symmetric update.
+//     applied in symmetric batched updates of `max_batch_observations`, each relinearised.
 //     Loop closing: a landmark not seen for `loop_min_gap_frames` is "old"; its re-observation is
 //     applied first, one landmark at a time (each relinearised at the state corrected by the
 //     previous ones), with a relaxed gate chi2_3(99.99 %) = 21.1: the innovation covariance already
@@ -27,8 +27,8 @@
 //     landmarks are initialised from the frontend's stereo point (p_c0, cov_p_c0) with the full
 //     cross-covariance (longest tracks first). The state is bounded (`max_landmarks`); when full,
 //     landmarks not seen for `evict_unseen_frames` make room (fewest observations, then oldest
-//     first). A landmark that fails gating `max_gate_failures` times in a row is removed (and its id
-//     never re-initialised: its track is likely a mismatch).
+//     first). A landmark that fails gating `max_gate_failures` times in a row is removed (and its
+//     id never re-initialised: its track is likely a mismatch).
 //
 // Not thread-safe. Deterministic.
 
@@ -62,6 +62,8 @@ struct StereoEkfOptions {
   // Re-observations after at least loop_min_gap_frames: relaxed gate chi2 3 dof 99.99 %.
   int loop_min_gap_frames = 30;
   double loop_gate_chi2 = 21.108;
+  // Observations per batched update (each batch relinearised; chosen for speed).
+  int max_batch_observations = 25;
   // Consecutive gating failures that remove a landmark.
   int max_gate_failures = 3;
   // When the state is full, landmarks unseen for at least this many frames may be evicted.
@@ -75,11 +77,11 @@ struct StereoEkfOptions {
 
 // Per-frame counts (for tests, logs and the run report).
 struct StereoEkfFrameStats {
-  int updated = 0;        // Observations applied (regular + loop).
-  int gated_out = 0;      // Observations of state landmarks rejected by the gate.
-  int loop_updates = 0;   // Re-observations after a long gap applied.
-  int added = 0;          // Landmarks initialised.
-  int removed = 0;        // Landmarks removed (gating failures + evictions).
+  int updated = 0;       // Observations applied (regular + loop).
+  int gated_out = 0;     // Observations of state landmarks rejected by the gate.
+  int loop_updates = 0;  // Re-observations after a long gap applied.
+  int added = 0;         // Landmarks initialised.
+  int removed = 0;       // Landmarks removed (gating failures + evictions).
 };
 
 class StereoEkfEstimator : public Estimator {

@@ -1,8 +1,9 @@
+#include "backend/ekf/ekf_models.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "backend/ekf/ekf_models.h"
 #include "backend/ekf/ekf_state.h"
 #include "tests/backend/ekf/measurement_simulator.h"
 #include "tests/test_util.h"

@@ -113,7 +113,8 @@ SimStream Simulate(const SimOptions& o) {
       obs.uv = uv + o.sigma_px * Eigen::Vector2d(normal(rng), normal(rng));
       obs.sigma_px = o.sigma_px;
       if (o.stereo) {
-        const double u_right = uv.x() - cam.fx * s.rig.baseline / p_c.z() + o.sigma_px * normal(rng);
+        const double u_right =
+            uv.x() - cam.fx * s.rig.baseline / p_c.z() + o.sigma_px * normal(rng);
         const Eigen::Vector3d uvd(obs.uv.x(), obs.uv.y(), obs.uv.x() - u_right);
         if (!(uvd.z() > 0.5)) continue;
         obs.u_right = u_right;

@@ -7,11 +7,10 @@
 // their covariance: T_prev_cur_true = T_hat Exp(eta), eta ~ N(0, cov).
 // Unlike a real frontend, the motion noise is independent of the observation noise.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <set>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/camera.h"
 #include "core/frame_measurement.h"

@@ -1,10 +1,11 @@
+#include "backend/ekf/mono_ekf.h"
+
 #include <glog/logging.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 
-#include "backend/ekf/mono_ekf.h"
 #include "core/eval/evaluate.h"
 #include "tests/backend/ekf/measurement_simulator.h"
 #include "tests/test_util.h"
@@ -14,8 +15,8 @@ namespace {
 
 using testing::SimOptions;
 using testing::SimPath;
-using testing::Simulate;
 using testing::SimStream;
+using testing::Simulate;
 
 double AteRmse(const Trajectory& gt, const Trajectory& est) {
   EvalOptions options;

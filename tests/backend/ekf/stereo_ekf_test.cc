@@ -1,3 +1,5 @@
+#include "backend/ekf/stereo_ekf.h"
+
 #include <glog/logging.h>
 #include <gtest/gtest.h>
 
@@ -5,7 +7,6 @@
 #include <cstdio>
 #include <set>
 
-#include "backend/ekf/stereo_ekf.h"
 #include "core/eval/evaluate.h"
 #include "tests/backend/ekf/measurement_simulator.h"
 #include "tests/test_util.h"
@@ -15,8 +16,8 @@ namespace {
 
 using testing::SimOptions;
 using testing::SimPath;
-using testing::Simulate;
 using testing::SimStream;
+using testing::Simulate;
 
 double AteRmse(const Trajectory& gt, const Trajectory& est) {
   EvalOptions options;
