@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "backend/ekf/mono_ekf.h"
+#include "backend/ekf/stereo_ekf.h"
 #include "backend/sliding_window_estimator.h"
 #include "core/error.h"
 
@@ -11,8 +13,16 @@ std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptio
   if (options.estimator == "ba" && options.mode == "stereo") {
     return std::make_unique<SlidingWindowEstimator>(rig, options.ba);
   }
+  if (options.estimator == "ekf" && options.mode == "stereo") {
+    return std::make_unique<StereoEkfEstimator>(rig, options.ekf_stereo);
+  }
+  if (options.estimator == "ekf" && options.mode == "mono") {
+    // On a stereo dataset the frontend still runs stereo: its visual motion is the mono EKF's
+    // scale-fixing dead reckoning (as on the paper's robots); the filter uses left pixels only.
+    return std::make_unique<MonoEkfEstimator>(rig.left, options.ekf_mono);
+  }
   throw Error() << "estimator '" << options.estimator << "' in mode '" << options.mode
-                << "' is not supported; available: ba/stereo";
+                << "' is not supported; available: ba/stereo, ekf/stereo, ekf/mono";
 }
 
 System::System(const StereoRig& rig, const SystemOptions& options)

@@ -19,7 +19,8 @@ bool SystemOptions::IsValid(std::string* why) const {
     return fail("estimator must be 'ba' or 'ekf', not '" + estimator + "'");
   if (mode != "stereo" && mode != "mono")
     return fail("mode must be 'stereo' or 'mono', not '" + mode + "'");
-  return frontend.IsValid(why) && ba.IsValid(why);
+  return frontend.IsValid(why) && ba.IsValid(why) && ekf_stereo.IsValid(why) &&
+         ekf_mono.IsValid(why);
 }
 
 void VisitOptions(SystemOptions* o, OptionVisitor* v) {
@@ -78,6 +79,27 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "min_observations", &b.ba.min_observations);
   v->Field("ba", "max_new_landmarks_per_keyframe", &b.max_new_landmarks_per_keyframe);
   v->Field("ba", "max_landmark_depth_m", &b.max_landmark_depth_m);
+  StereoEkfOptions& es = o->ekf_stereo;
+  v->Field("ekf_stereo", "max_landmarks", &es.max_landmarks);
+  v->Field("ekf_stereo", "grid_cols", &es.grid_cols);
+  v->Field("ekf_stereo", "grid_rows", &es.grid_rows);
+  v->Field("ekf_stereo", "target_per_zone", &es.target_per_zone);
+  v->Field("ekf_stereo", "new_per_zone_per_frame", &es.new_per_zone_per_frame);
+  v->Field("ekf_stereo", "max_relative_depth_sigma", &es.max_relative_depth_sigma);
+  v->Field("ekf_stereo", "gate_chi2", &es.gate_chi2);
+  v->Field("ekf_stereo", "loop_min_gap_frames", &es.loop_min_gap_frames);
+  v->Field("ekf_stereo", "loop_gate_chi2", &es.loop_gate_chi2);
+  MonoEkfOptions& em = o->ekf_mono;
+  v->Field("ekf_mono", "max_landmarks", &em.max_landmarks);
+  v->Field("ekf_mono", "d_min", &em.d_min);
+  v->Field("ekf_mono", "d_max", &em.d_max);
+  v->Field("ekf_mono", "alpha", &em.alpha);
+  v->Field("ekf_mono", "k_sigma", &em.k_sigma);
+  v->Field("ekf_mono", "prune_chi2", &em.prune_chi2);
+  v->Field("ekf_mono", "sprt_false_alarm", &em.sprt_false_alarm);
+  v->Field("ekf_mono", "sprt_missed_detection", &em.sprt_missed_detection);
+  v->Field("ekf_mono", "min_image_motion_chi2", &em.min_image_motion_chi2);
+  v->Field("ekf_mono", "gate_chi2", &em.gate_chi2);
 }
 
 namespace {

@@ -15,6 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "backend/ekf/mono_ekf.h"
+#include "backend/ekf/stereo_ekf.h"
 #include "backend/sliding_window_estimator.h"
 #include "frontend/frontend.h"
 
@@ -25,12 +27,15 @@ struct SystemOptions {
   std::string mode = "stereo";   // "stereo" or "mono".
   FrontendOptions frontend;
   SlidingWindowEstimatorOptions ba;
+  StereoEkfOptions ekf_stereo;
+  MonoEkfOptions ekf_mono;
 
   bool IsValid(std::string* why) const;
 };
 
 // Visits every settable option as (section, key, pointer). Sections: "" (top level), "harris",
-// "matcher" (tracking), "stereo", "motion", "keyframe", "frontend", "ba".
+// "matcher" (tracking), "stereo", "motion", "keyframe", "frontend", "ba",
+// "ekf_stereo", "ekf_mono".
 class OptionVisitor {
  public:
   virtual ~OptionVisitor() = default;

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "backend/system.h"
+#include "core/error.h"
 #include "core/eval/evaluate.h"
 #include "core/io/trajectory_io.h"
 #include "core/sim/dataset_writer.h"
@@ -49,6 +50,44 @@ TEST(SystemE2e, RoverStretchStereoBa) {
   std::cout << "[ measured ] rover 150 frames, path " << seq.PathLength() << " m, ATE "
             << run.eval.ate.translation.rmse << " m (" << 100 * fraction << " %)" << std::endl;
   EXPECT_LT(fraction, 0.005);
+}
+
+// The paper's filters on the same measurements: stereo EKF, and the bearing-only mono EKF whose
+// scale comes from the stereo visual motion (dead reckoning, as on the paper's robots).
+TEST(SystemE2e, RoverStretchEkfStereoAndMono) {
+  sim::SimOptions sim;
+  sim.preset = "rover_loop";
+  sim.frames = 100;
+  sim.seed = 7;
+  const sim::SyntheticSequence seq(sim);
+  for (const char* mode : {"stereo", "mono"}) {
+    SystemOptions options;
+    options.estimator = "ekf";
+    options.mode = mode;
+    const SystemRun run = RunSystem(seq, options);
+    ASSERT_TRUE(run.eval.ok) << run.eval.error;
+    EXPECT_EQ(run.trajectory.size(), seq.size());
+    const double fraction = run.eval.ate.translation.rmse / seq.PathLength();
+    std::cout << "[ measured ] ekf/" << mode << " rover 100 frames, path " << seq.PathLength()
+              << " m, ATE " << run.eval.ate.translation.rmse << " m (" << 100 * fraction
+              << " %)" << std::endl;
+    EXPECT_LT(fraction, 0.003) << mode;
+  }
+}
+
+TEST(SystemE2e, UnsupportedCombinationIsAClearError) {
+  sim::SimOptions sim;
+  sim.frames = 2;
+  const sim::SyntheticSequence seq(sim);
+  SystemOptions options;
+  options.estimator = "ba";
+  options.mode = "mono";
+  try {
+    System system(seq.rig(), options);
+    ADD_FAILURE() << "ba/mono should be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not supported"), std::string::npos) << e.what();
+  }
 }
 
 std::string ReadAll(const std::string& path) {
