@@ -84,6 +84,24 @@ bool MotionEstimator::Linearize(const MotionCorrespondence& m, const Pose& T_pre
   return true;
 }
 
+int MotionEstimator::NormalEquations(const std::vector<MotionCorrespondence>& matches,
+                                     const Pose& T_prev_cur, const std::vector<bool>& inlier,
+                                     Matrix6d* H, Vector6d* b) const {
+  H->setZero();
+  b->setZero();
+  int used = 0;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if (!inlier[i]) continue;
+    Eigen::VectorXd r;
+    Eigen::MatrixXd J, W;
+    if (!Linearize(matches[i], T_prev_cur, &r, &J, &W)) continue;
+    *H += J.transpose() * W * J;
+    *b += J.transpose() * W * r;
+    ++used;
+  }
+  return used;
+}
+
 int MotionEstimator::CountInliers(const std::vector<MotionCorrespondence>& matches,
                                   const Pose& T_prev_cur, std::vector<bool>* inlier) const {
   const Pose T_cur_prev = T_prev_cur.inverse();
@@ -163,19 +181,8 @@ std::optional<MotionResult> MotionEstimator::Estimate3D2D(
   Pose T = best;
   Matrix6d H = Matrix6d::Zero();
   for (int iter = 0; iter < options_.refine_iterations; ++iter) {
-    H.setZero();
-    Vector6d b = Vector6d::Zero();
-    int used = 0;
-    for (int i = 0; i < n; ++i) {
-      if (!inlier[i]) continue;
-      Eigen::VectorXd r;
-      Eigen::MatrixXd J, W;
-      if (!Linearize(matches[i], T, &r, &J, &W)) continue;
-      H += J.transpose() * W * J;
-      b += J.transpose() * W * r;
-      ++used;
-    }
-    if (used < options_.min_inliers) return std::nullopt;
+    Vector6d b;
+    if (NormalEquations(matches, T, inlier, &H, &b) < options_.min_inliers) return std::nullopt;
     const Eigen::LDLT<Matrix6d> ldlt(H);
     if (ldlt.info() != Eigen::Success) return std::nullopt;
     const Vector6d delta = -ldlt.solve(b);
@@ -194,16 +201,8 @@ std::optional<MotionResult> MotionEstimator::Estimate3D2D(
     if (delta.norm() < 1e-10) break;
   }
   // 3. Covariance at the solution, over the final inliers.
-  H.setZero();
-  int count = 0;
-  for (int i = 0; i < n; ++i) {
-    if (!inlier[i]) continue;
-    Eigen::VectorXd r;
-    Eigen::MatrixXd J, W;
-    if (!Linearize(matches[i], T, &r, &J, &W)) continue;
-    H += J.transpose() * W * J;
-    ++count;
-  }
+  Vector6d unused_b;
+  const int count = NormalEquations(matches, T, inlier, &H, &unused_b);
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
   if (eig.info() != Eigen::Success || eig.eigenvalues().minCoeff() <= 1e-12) return std::nullopt;
 

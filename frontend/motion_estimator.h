@@ -86,6 +86,9 @@ class MotionEstimator {
   // Residual (u, v[, d]) and its Jacobian w.r.t. delta; false when the point is behind.
   bool Linearize(const MotionCorrespondence& m, const Pose& T_prev_cur, Eigen::VectorXd* r,
                  Eigen::MatrixXd* J, Eigen::MatrixXd* W) const;
+  // Gauss-Newton normal equations H delta = -b over the inliers; returns how many were used.
+  int NormalEquations(const std::vector<MotionCorrespondence>& matches, const Pose& T_prev_cur,
+                      const std::vector<bool>& inlier, Matrix6d* H, Vector6d* b) const;
   int CountInliers(const std::vector<MotionCorrespondence>& matches, const Pose& T_prev_cur,
                    std::vector<bool>* inlier) const;
 
