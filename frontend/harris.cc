@@ -142,9 +142,8 @@ void DetectLevel(const cv::Mat& smoothed, const PyramidLevel& level, int level_i
   GradientProducts(smoothed, &ws);
   const int side_i = KernelSide(options.sigma_i);
   const cv::Mat kernel_i = cv::getGaussianKernel(side_i, options.sigma_i, CV_32F);
-  for (const auto& [src, dst] : {std::pair<cv::Mat*, cv::Mat*>{&ws.pxx, &ws.mxx},
-                                 {&ws.pxy, &ws.mxy},
-                                 {&ws.pyy, &ws.myy}}) {
+  for (const auto& [src, dst] :
+       {std::pair<cv::Mat*, cv::Mat*>{&ws.pxx, &ws.mxx}, {&ws.pxy, &ws.mxy}, {&ws.pyy, &ws.myy}}) {
     cv::sepFilter2D(*src, *dst, CV_32F, kernel_i, kernel_i, cv::Point(-1, -1), 0.0,
                     cv::BORDER_REFLECT_101);
   }
@@ -313,7 +312,8 @@ AreaTaps MakeAreaTaps(int n_src, int n_dst) {
         ++used;
       }
     }
-    for (int k = 0; k < used; ++k) t.weight[base + k] = static_cast<float>(t.weight[base + k] / sum);
+    for (int k = 0; k < used; ++k)
+      t.weight[base + k] = static_cast<float>(t.weight[base + k] / sum);
     for (int k = used; k < t.taps; ++k) t.src[base + k] = t.src[base];
   }
   return t;
@@ -514,8 +514,8 @@ DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options) {
       level.offset_y = src.scale_y * by + src.offset_y;
     }
     // 8-bit or float in, float out: the separable filter converts while it smooths.
-    const cv::Mat kernel_d = cv::getGaussianKernel(KernelSide(options.sigma_d), options.sigma_d,
-                                                   CV_32F);
+    const cv::Mat kernel_d =
+        cv::getGaussianKernel(KernelSide(options.sigma_d), options.sigma_d, CV_32F);
     level.smoothed = RecycledImage(level_grey.size());
     cv::sepFilter2D(level_grey, level.smoothed, CV_32F, kernel_d, kernel_d, cv::Point(-1, -1), 0.0,
                     cv::BORDER_REFLECT_101);
