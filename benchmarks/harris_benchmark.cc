@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "frontend/frontend.h"
 #include "frontend/harris.h"
 #include "frontend/matcher.h"
 #include "tests/frontend/test_images.h"
@@ -54,6 +55,24 @@ BENCHMARK(BM_DetectHarris)
     ->Args({1, 1})
     ->Args({1, 4})
     ->Unit(benchmark::kMillisecond);
+
+// The frontend's per-image detection (SequenceHarrisOptions: 2 levels, <= 1000 points).
+void BM_DetectHarrisSequence(benchmark::State& state) {
+  const cv::Mat img = ImageFor(static_cast<int>(state.range(0)));
+  if (img.empty()) {
+    state.SkipWithError("shared data kitti06_0000-0050 absent");
+    return;
+  }
+  const dala::HarrisOptions options = dala::SequenceHarrisOptions();
+  size_t n = 0;
+  for (auto _ : state) {
+    const dala::DetectedImage d = dala::DetectHarris(img, options);
+    n = d.points.size();
+    benchmark::DoNotOptimize(d.points.data());
+  }
+  state.counters["points"] = static_cast<double>(n);
+}
+BENCHMARK(BM_DetectHarrisSequence)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_OpenCvCornerHarris(benchmark::State& state) {
   const cv::Mat img = ImageFor(static_cast<int>(state.range(0)));

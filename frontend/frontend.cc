@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <thread>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -202,9 +201,9 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   cur.id = frame.id;
   DetectedImage right;
   if (stereo && options_.parallel_detection) {
-    std::thread right_thread([&] { right = DetectHarris(frame.right, options_.harris); });
+    detection_worker_.Start([&] { right = DetectHarris(frame.right, options_.harris); });
     cur.detection = DetectHarris(frame.left, options_.harris);
-    right_thread.join();
+    detection_worker_.Wait();
   } else {
     cur.detection = DetectHarris(frame.left, options_.harris);
     if (stereo) right = DetectHarris(frame.right, options_.harris);

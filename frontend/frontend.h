@@ -37,6 +37,7 @@
 #include "frontend/matcher.h"
 #include "frontend/motion_estimator.h"
 #include "frontend/stereo.h"
+#include "frontend/worker_thread.h"
 
 namespace dala {
 
@@ -101,6 +102,7 @@ class Frontend {
   FrontendOptions options_;
   MotionEstimator motion_estimator_;
   KeyframePolicy keyframe_policy_;
+  WorkerThread detection_worker_;  // Detects the right image (persistent: keeps its scratch).
   std::optional<TrackedFrame> prev_;
   std::optional<TrackedFrame> keyframe_;
   Pose velocity_T_prev_cur_ = Pose::Identity();

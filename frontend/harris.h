@@ -22,7 +22,8 @@
 //   dala::DetectedImage det = dala::DetectHarris(gray, options);
 //   for (const dala::InterestPoint& p : det.points) ... p.uv, p.orientation ...
 //
-// Thread safety: DetectHarris is re-entrant (it only reads its inputs).
+// Thread safety: DetectHarris is re-entrant (it only reads its inputs; its scratch images and
+// the pool its pyramid images are recycled from are per thread).
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>

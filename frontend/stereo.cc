@@ -9,20 +9,10 @@
 namespace dala {
 namespace {
 
-// SSD between the left window and the right window centred at (u, v); NaN outside the image.
-double WindowSsd(const cv::Mat& left_window, const cv::Mat& right_gray, double u, double v,
-                 int side) {
-  const double half = 0.5 * (side - 1);
-  if (u - half < 0 || v - half < 0 || u + half > right_gray.cols - 1 ||
-      v + half > right_gray.rows - 1) {
-    return std::nan("");
-  }
-  cv::Mat right_window;
-  cv::getRectSubPix(right_gray, cv::Size(side, side), cv::Point2f(u, v), right_window, CV_32F);
-  return cv::norm(left_window, right_window, cv::NORM_L2SQR);
-}
-
 // Returns the refined right abscissa, or the input when the refinement is not defined.
+// The SSD of the left window (centred at uv_left) against the right windows centred at
+// (u0 + d, v), d = -1, 0, 1, u0 = round(u_right); the three right windows share their sub-pixel
+// row offset, so they are the columns of one (side + 2) x side window sampled once.
 double RefineRightAbscissa(const cv::Mat& left_gray, const cv::Mat& right_gray,
                            const Eigen::Vector2d& uv_left, double u_right, int side) {
   const double half = 0.5 * (side - 1);
@@ -30,15 +20,23 @@ double RefineRightAbscissa(const cv::Mat& left_gray, const cv::Mat& right_gray,
       uv_left.y() + half > left_gray.rows - 1) {
     return u_right;
   }
-  cv::Mat left_window;
-  cv::getRectSubPix(left_gray, cv::Size(side, side), cv::Point2f(uv_left.x(), uv_left.y()),
-                    left_window, CV_32F);
   const double v = uv_left.y();
   const double u0 = std::round(u_right);
-  const double sm = WindowSsd(left_window, right_gray, u0 - 1, v, side);
-  const double s0 = WindowSsd(left_window, right_gray, u0, v, side);
-  const double sp = WindowSsd(left_window, right_gray, u0 + 1, v, side);
-  if (!std::isfinite(sm) || !std::isfinite(s0) || !std::isfinite(sp)) return u_right;
+  // Every right window must lie inside the image (else the refinement is not defined).
+  if (u0 - 1 - half < 0 || v - half < 0 || u0 + 1 + half > right_gray.cols - 1 ||
+      v + half > right_gray.rows - 1) {
+    return u_right;
+  }
+  thread_local cv::Mat left_window, right_windows;
+  cv::getRectSubPix(left_gray, cv::Size(side, side), cv::Point2f(uv_left.x(), uv_left.y()),
+                    left_window, CV_32F);
+  cv::getRectSubPix(right_gray, cv::Size(side + 2, side), cv::Point2f(u0, v), right_windows,
+                    CV_32F);
+  double ssd[3];
+  for (int d = 0; d < 3; ++d) {
+    ssd[d] = cv::norm(left_window, right_windows(cv::Rect(d, 0, side, side)), cv::NORM_L2SQR);
+  }
+  const double sm = ssd[0], s0 = ssd[1], sp = ssd[2];
   const double curvature = sm - 2 * s0 + sp;
   // Not a minimum at u0: the match sits on a slope of the SSD, keep the detector's position.
   if (curvature <= 0 || s0 > sm || s0 > sp) return u_right;
