@@ -6,6 +6,12 @@
 
 namespace dala {
 
+SlidingWindowBa::Options SequenceBaOptions() {
+  SlidingWindowBa::Options options;
+  options.use_marginalization = false;
+  return options;
+}
+
 bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (!ba.IsValid(why)) return false;
   const auto fail = [&](const char* msg) {
