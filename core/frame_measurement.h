@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -57,6 +58,25 @@ struct FrontendTimings {
   double detect_ms = 0, stereo_ms = 0, track_ms = 0, motion_ms = 0, total_ms = 0;
 };
 
+// A place recognised by the frontend at this keyframe: an old keyframe seen again, verified by
+// the robust matcher and a RANSAC PnP on the old keyframe's stereo points. On detection the
+// frontend also relabels the current observations matched to the old keyframe's points with the
+// OLD landmark ids (FeatureObservation::landmark), and the tracks continue under those ids, so an
+// estimator that still holds the old landmarks (the EKF) re-observes them: that is its loop
+// closing. A smoother uses T_old_cur as a loop edge of its pose graph.
+struct LoopDetection {
+  FrameId old_frame;  // The old keyframe's frame.
+  // The current left camera in the old keyframe's left camera: p_old = T_old_cur * p_cur.
+  Pose T_old_cur = Pose::Identity();
+  // Covariance of delta in T_old_cur = T_hat * Exp(delta), delta = [rotation; translation].
+  Matrix6d cov = Matrix6d::Identity();
+  int inliers = 0;          // PnP inliers.
+  int correspondences = 0;  // Verified matches before PnP.
+  double appearance_score = 0.0;  // Of the place-recognition candidate (higher = more similar).
+  // (current landmark id before relabelling, old landmark id) of every PnP inlier.
+  std::vector<std::pair<LandmarkId, LandmarkId>> relabelled;
+};
+
 struct FrameMeasurement {
   FrameId frame;
   int64_t t_ns = 0;
@@ -69,6 +89,8 @@ struct FrameMeasurement {
   // the monocular EKF uses it to fix the scale.
   std::optional<MotionEstimate> odometry;
   bool is_keyframe = false;
+  // Set on a keyframe where a loop was recognised (see LoopDetection).
+  std::optional<LoopDetection> loop;
   // Frames since the last keyframe and this frame's tracked fraction of that keyframe's points.
   double tracked_fraction = 1.0;
   FrontendTimings timings;
