@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include <glog/logging.h>
+
 #include "backend/ekf/mono_ekf.h"
 #include "backend/ekf/stereo_ekf.h"
 #include "backend/sliding_window_estimator.h"
@@ -58,6 +60,7 @@ TrackResult System::Track(const Frame& frame) {
   s.estimator_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
   s.total_ms = std::chrono::duration<double, std::milli>(t2 - t0).count();
   stats_.push_back(s);
+  if (m.is_keyframe) RecordKeyframe();
 
   TrackResult r;
   r.status = m.status;
@@ -66,5 +69,57 @@ TrackResult System::Track(const Frame& frame) {
   r.keyframe = m.is_keyframe;
   return r;
 }
+
+void System::RecordKeyframe() {
+  KeyframeRecord record;
+  record.trajectory_index = stats_.size() - 1;
+  const DetectedImage* detection = frontend_->keyframe_detection();
+  const std::vector<LandmarkId>* landmarks = frontend_->keyframe_landmarks();
+  if (detection != nullptr && landmarks != nullptr) {
+    const int n = detection->patch_size * detection->patch_size;
+    for (size_t i = 0; i < landmarks->size(); ++i) {
+      if (!(*landmarks)[i].valid()) continue;
+      const InterestPoint& p = detection->points[i];
+      SavedKeyframePoint saved;
+      saved.landmark = (*landmarks)[i];
+      saved.uv = p.uv;
+      saved.orientation = p.orientation;
+      saved.scale = p.scale;
+      const float* row = detection->descriptors.ptr<float>(static_cast<int>(i));
+      saved.descriptor.assign(row, row + n);
+      record.points.push_back(std::move(saved));
+    }
+  }
+  keyframe_records_.push_back(std::move(record));
+}
+
+std::vector<KeyframeInfo> System::keyframes() const {
+  const Trajectory trajectory = estimator_->trajectory();
+  std::vector<KeyframeInfo> out;
+  for (const KeyframeRecord& record : keyframe_records_) {
+    CHECK_LT(record.trajectory_index, trajectory.poses.size());
+    KeyframeInfo info;
+    info.frame = stats_[record.trajectory_index].frame;
+    info.t_ns = trajectory.poses[record.trajectory_index].t_ns;
+    info.T_w_c = trajectory.poses[record.trajectory_index].T_w_c;
+    info.points = record.points;
+    out.push_back(std::move(info));
+  }
+  return out;
+}
+
+SavedMap System::MapSnapshot() const {
+  SavedMap map;
+  for (KeyframeInfo& kf : keyframes()) {
+    if (!kf.points.empty()) map.descriptor_size = static_cast<int>(kf.points[0].descriptor.size());
+    map.keyframes.push_back({kf.frame, kf.t_ns, kf.T_w_c, std::move(kf.points)});
+  }
+  for (const MapPoint& p : estimator_->map()) map.landmarks.push_back({p.id, p.p_w, p.observations});
+  return map;
+}
+
+void System::SaveMap(const std::string& path) const { WriteMapFile(path, MapSnapshot()); }
+
+SavedMap System::LoadMap(const std::string& path) { return ReadMapFile(path); }
 
 }  // namespace dala

@@ -21,6 +21,7 @@
 #include "backend/estimator.h"
 #include "backend/system_options.h"
 #include "core/camera.h"
+#include "core/io/map_file.h"
 #include "frontend/frontend.h"
 
 namespace dala {
@@ -51,6 +52,16 @@ struct FrameStats {
 // that does not exist (e.g. "ba" + "mono"), saying which do.
 std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptions& options);
 
+// A keyframe of the run: the frame the frontend chose as keyframe, its pose now (corrected by
+// later optimisation) and the interest points it keeps for recognition.
+struct KeyframeInfo {
+  FrameId frame;
+  int64_t t_ns = 0;
+  Pose T_w_c = Pose::Identity();
+  // Points with a landmark id: position, orientation, scale and patch descriptor (harris.h).
+  std::vector<SavedKeyframePoint> points;
+};
+
 class System {
  public:
   // Throws dala::Error when the options are invalid or the rig does not suit the mode
@@ -62,16 +73,36 @@ class System {
   // Every frame tracked so far (estimates corrected by later optimisation).
   Trajectory trajectory() const { return estimator_->trajectory(); }
   std::vector<MapPoint> map() const { return estimator_->map(); }
+  // Every keyframe so far, in order, with its current pose.
+  std::vector<KeyframeInfo> keyframes() const;
   const std::vector<FrameStats>& stats() const { return stats_; }
+
+  // The map as saved: keyframes (poses, points, descriptors) and landmarks (core/io/map_file.h
+  // gives the versioned binary format). Throws dala::Error when the file cannot be written.
+  SavedMap MapSnapshot() const;
+  void SaveMap(const std::string& path) const;
+  // Reads a map written by SaveMap (dala::Error on a missing, foreign, corrupted or other-version
+  // file). The map is returned for use (inspection, relocalisation by the caller); a System does
+  // not yet continue tracking inside a loaded map.
+  static SavedMap LoadMap(const std::string& path);
   const SystemOptions& options() const { return options_; }
   const Estimator& estimator() const { return *estimator_; }
 
  private:
+  void RecordKeyframe();
+
   StereoRig rig_;
   SystemOptions options_;
   std::unique_ptr<Frontend> frontend_;
   std::unique_ptr<Estimator> estimator_;
   std::vector<FrameStats> stats_;
+  // Per keyframe: its index in the trajectory and its points (the pose is read from the
+  // estimator's trajectory when asked, so it follows later corrections).
+  struct KeyframeRecord {
+    size_t trajectory_index = 0;
+    std::vector<SavedKeyframePoint> points;
+  };
+  std::vector<KeyframeRecord> keyframe_records_;
 };
 
 }  // namespace dala

@@ -80,6 +80,16 @@ class Frontend {
 
   const StereoRig& rig() const { return rig_; }
 
+  // The current keyframe (the last frame whose measurement had is_keyframe): its interest points
+  // with their patch descriptors, and each point's landmark id (invalid: none). Null before the
+  // first keyframe. What a saved map keeps of a keyframe (System::SaveMap).
+  const DetectedImage* keyframe_detection() const {
+    return keyframe_ ? &keyframe_->detection : nullptr;
+  }
+  const std::vector<LandmarkId>* keyframe_landmarks() const {
+    return keyframe_ ? &keyframe_->landmark : nullptr;
+  }
+
  private:
   // What is kept of a processed frame for the next ones.
   struct TrackedFrame {

@@ -1,0 +1,73 @@
+#ifndef DALA_CORE_IO_MAP_FILE_H_
+#define DALA_CORE_IO_MAP_FILE_H_
+
+// The saved map of a SLAM run (System::SaveMap / LoadMap): keyframes with their poses and interest
+// points (landmark id, position, orientation, scale and the matcher's patch descriptor), and the
+// landmarks in the world frame. It holds what place recognition and relocalisation need.
+//
+// Binary format, version 1 (little-endian, IEEE floats; docs/api.md gives the same table):
+//   char[8]  magic "DALAMAP\0"
+//   uint32   version (1)
+//   uint32   descriptor_size D (floats per descriptor; 0 when the map has none)
+//   uint64   keyframe count, then per keyframe:
+//              int64 frame id, int64 t_ns, float64[7] T_w_c as (qx qy qz qw tx ty tz),
+//              uint64 point count, then per point:
+//                int64 landmark id (-1: none), float64[2] uv (left image pixels),
+//                float32 orientation (rad), float32 scale, float32[D] descriptor
+//   uint64   landmark count, then per landmark: int64 id, float64[3] p_w, int32 observations
+//   uint64   FNV-1a 64 hash of every preceding byte (detects truncation and corruption)
+// A reader accepts exactly the versions it knows and says which ones when it meets another.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/geometry.h"
+#include "core/types.h"
+
+namespace dala {
+
+struct MapFileVersion {
+  static constexpr uint32_t kCurrent = 1;
+};
+
+struct SavedKeyframePoint {
+  LandmarkId landmark;  // Invalid when the point belongs to no landmark.
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+  float orientation = 0.f;
+  float scale = 1.f;
+  std::vector<float> descriptor;  // descriptor_size floats (or empty when the map has none).
+};
+
+struct SavedKeyframe {
+  FrameId frame;
+  int64_t t_ns = 0;
+  Pose T_w_c = Pose::Identity();
+  std::vector<SavedKeyframePoint> points;
+};
+
+struct SavedLandmark {
+  LandmarkId id;
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  int observations = 0;
+};
+
+struct SavedMap {
+  int descriptor_size = 0;
+  std::vector<SavedKeyframe> keyframes;
+  std::vector<SavedLandmark> landmarks;
+};
+
+// Writes atomically (a reader never sees half a file). Throws dala::Error when the file cannot
+// be written or a point's descriptor does not have descriptor_size floats.
+void WriteMapFile(const std::string& path, const SavedMap& map);
+
+// Throws dala::Error naming the file and what is wrong: not a dala map, a version this build
+// does not read, truncated or corrupted (hash mismatch), or counts that do not fit the file.
+SavedMap ReadMapFile(const std::string& path);
+
+}  // namespace dala
+
+#endif  // DALA_CORE_IO_MAP_FILE_H_

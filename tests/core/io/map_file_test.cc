@@ -1,0 +1,134 @@
+#include "core/io/map_file.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <random>
+
+#include "core/error.h"
+#include "tests/test_util.h"
+
+namespace dala {
+namespace {
+
+using ::testing::HasSubstr;
+
+SavedMap MakeMap(int descriptor_size) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 5.0);
+  SavedMap map;
+  map.descriptor_size = descriptor_size;
+  for (int k = 0; k < 3; ++k) {
+    SavedKeyframe kf;
+    kf.frame = FrameId(10 * k + 1);
+    kf.t_ns = 1'000'000'007LL * k;
+    kf.T_w_c = testing::RandomPose(rng, 1.0, 3.0);
+    for (int i = 0; i < 5 + k; ++i) {
+      SavedKeyframePoint p;
+      p.landmark = LandmarkId(i % 2 ? 100 + i : -1);
+      p.uv = Eigen::Vector2d(n(rng) + 300, n(rng) + 200);
+      p.orientation = static_cast<float>(0.1 * i);
+      p.scale = 1.41421356f;
+      for (int d = 0; d < descriptor_size; ++d) p.descriptor.push_back(static_cast<float>(n(rng)));
+      kf.points.push_back(p);
+    }
+    map.keyframes.push_back(kf);
+  }
+  for (int i = 0; i < 4; ++i) {
+    map.landmarks.push_back({LandmarkId(100 + i), Eigen::Vector3d(n(rng), n(rng), n(rng)), i + 2});
+  }
+  return map;
+}
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+void WriteBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+std::string ReadError(const std::string& path) {
+  try {
+    ReadMapFile(path);
+  } catch (const Error& e) {
+    return e.message();
+  }
+  return "no error";
+}
+
+TEST(MapFileTest, RoundTripIsExact) {
+  testing::TempDir dir;
+  for (int descriptor_size : {0, 121}) {
+    const SavedMap map = MakeMap(descriptor_size);
+    WriteMapFile(dir / "m.dmap", map);
+    const SavedMap back = ReadMapFile(dir / "m.dmap");
+    ASSERT_EQ(back.descriptor_size, descriptor_size);
+    ASSERT_EQ(back.keyframes.size(), map.keyframes.size());
+    for (size_t k = 0; k < map.keyframes.size(); ++k) {
+      const SavedKeyframe& a = map.keyframes[k];
+      const SavedKeyframe& b = back.keyframes[k];
+      EXPECT_EQ(a.frame, b.frame);
+      EXPECT_EQ(a.t_ns, b.t_ns);
+      EXPECT_POSE_NEAR(a.T_w_c, b.T_w_c, 1e-15);
+      ASSERT_EQ(a.points.size(), b.points.size());
+      for (size_t i = 0; i < a.points.size(); ++i) {
+        EXPECT_EQ(a.points[i].landmark, b.points[i].landmark);
+        EXPECT_EQ(a.points[i].uv, b.points[i].uv);
+        EXPECT_EQ(a.points[i].orientation, b.points[i].orientation);
+        EXPECT_EQ(a.points[i].scale, b.points[i].scale);
+        EXPECT_EQ(a.points[i].descriptor, b.points[i].descriptor);
+      }
+    }
+    ASSERT_EQ(back.landmarks.size(), map.landmarks.size());
+    for (size_t i = 0; i < map.landmarks.size(); ++i) {
+      EXPECT_EQ(back.landmarks[i].id, map.landmarks[i].id);
+      EXPECT_EQ(back.landmarks[i].p_w, map.landmarks[i].p_w);
+      EXPECT_EQ(back.landmarks[i].observations, map.landmarks[i].observations);
+    }
+  }
+}
+
+TEST(MapFileTest, EmptyMapRoundTrips) {
+  testing::TempDir dir;
+  WriteMapFile(dir / "e.dmap", SavedMap());
+  const SavedMap back = ReadMapFile(dir / "e.dmap");
+  EXPECT_TRUE(back.keyframes.empty());
+  EXPECT_TRUE(back.landmarks.empty());
+}
+
+TEST(MapFileTest, BadFilesGiveClearErrors) {
+  testing::TempDir dir;
+  EXPECT_THAT(ReadError(dir / "missing.dmap"), HasSubstr("cannot open"));
+  WriteBytes(dir / "text.dmap", "# TUM trajectory\n0 0 0 0 0 0 0 1\n");
+  EXPECT_THAT(ReadError(dir / "text.dmap"), HasSubstr("not a dala map file"));
+
+  WriteMapFile(dir / "m.dmap", MakeMap(121));
+  const std::string good = ReadBytes(dir / "m.dmap");
+
+  std::string future = good;
+  future[8] = 7;  // version field
+  WriteBytes(dir / "v.dmap", future);
+  EXPECT_THAT(ReadError(dir / "v.dmap"), HasSubstr("version 7"));
+
+  for (size_t cut : {good.size() - 1, good.size() / 2, size_t{20}}) {
+    WriteBytes(dir / "t.dmap", good.substr(0, cut));
+    EXPECT_THAT(ReadError(dir / "t.dmap"), HasSubstr("truncated")) << "cut at " << cut;
+  }
+  std::string flipped = good;
+  flipped[good.size() / 3] ^= 0x10;
+  WriteBytes(dir / "f.dmap", flipped);
+  EXPECT_THAT(ReadError(dir / "f.dmap"), HasSubstr("corrupted"));
+}
+
+TEST(MapFileTest, DescriptorSizeMismatchIsRefusedAndWritesNothing) {
+  testing::TempDir dir;
+  SavedMap map = MakeMap(121);
+  map.keyframes[1].points[2].descriptor.pop_back();
+  EXPECT_THROW(WriteMapFile(dir / "bad.dmap", map), Error);
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.dmap"));
+}
+
+}  // namespace
+}  // namespace dala

@@ -1,0 +1,67 @@
+// System::keyframes / SaveMap / LoadMap on a rendered stereo stretch with exact ground truth.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "backend/system.h"
+#include "core/sim/synthetic_sequence.h"
+#include "tests/test_util.h"
+
+namespace dala {
+namespace {
+
+TEST(SystemMap, SavedMapHoldsKeyframesLandmarksAndDescriptors) {
+  sim::SimOptions sim;
+  sim.preset = "rover_loop";
+  sim.frames = 40;
+  sim.seed = 11;
+  const sim::SyntheticSequence seq(sim);
+  for (const char* estimator : {"ba", "ekf"}) {
+    SystemOptions options;
+    options.estimator = estimator;
+    System system(seq.rig(), options);
+    for (size_t i = 0; i < seq.size(); ++i) system.Track(seq.Render(i));
+
+    const std::vector<KeyframeInfo> keyframes = system.keyframes();
+    ASSERT_GE(keyframes.size(), 3u) << estimator;
+    EXPECT_EQ(keyframes.front().frame, FrameId(0));
+    // The first frame is the world frame; every keyframe pose is close to the ground truth
+    // (world = first camera in both), and keyframes are in time order.
+    const Pose T_w0_gt_inv = seq.T_w_c0(0).inverse();
+    for (size_t k = 0; k < keyframes.size(); ++k) {
+      const KeyframeInfo& kf = keyframes[k];
+      if (k > 0) {
+        EXPECT_LT(keyframes[k - 1].t_ns, kf.t_ns);
+      }
+      const Pose T_gt = T_w0_gt_inv * seq.T_w_c0(kf.frame.value);
+      EXPECT_LT((kf.T_w_c.translation() - T_gt.translation()).norm(), 0.15)
+          << estimator << " keyframe " << kf.frame;
+      EXPECT_GT(kf.points.size(), 50u);
+      for (const SavedKeyframePoint& p : kf.points) {
+        ASSERT_TRUE(p.landmark.valid());
+        ASSERT_EQ(p.descriptor.size(), 121u);
+      }
+    }
+
+    testing::TempDir dir;
+    system.SaveMap(dir / "run.dmap");
+    const SavedMap loaded = System::LoadMap(dir / "run.dmap");
+    ASSERT_EQ(loaded.keyframes.size(), keyframes.size());
+    EXPECT_EQ(loaded.descriptor_size, 121);
+    for (size_t k = 0; k < keyframes.size(); ++k) {
+      EXPECT_EQ(loaded.keyframes[k].frame, keyframes[k].frame);
+      EXPECT_POSE_NEAR(loaded.keyframes[k].T_w_c, keyframes[k].T_w_c, 1e-12);
+      ASSERT_EQ(loaded.keyframes[k].points.size(), keyframes[k].points.size());
+      EXPECT_EQ(loaded.keyframes[k].points.back().descriptor,
+                keyframes[k].points.back().descriptor);
+    }
+    const std::vector<MapPoint> map = system.map();
+    ASSERT_EQ(loaded.landmarks.size(), map.size());
+    ASSERT_FALSE(map.empty());
+    EXPECT_EQ(loaded.landmarks.front().id, map.front().id);
+    EXPECT_EQ(loaded.landmarks.back().p_w, map.back().p_w);
+  }
+}
+
+}  // namespace
+}  // namespace dala
