@@ -180,6 +180,7 @@ int RunRun(const std::vector<std::string>& args) {
     ids.push_back(p.id.value);
   }
   WritePly(dir + "/map.ply", points, nullptr, &ids);
+  system.SaveMap(dir + "/map.dmap");
 
   const auto& stats = system.stats();
   std::vector<double> total_ms;
@@ -236,7 +237,7 @@ int RunRun(const std::vector<std::string>& args) {
               << " m (" << (options.mode == "mono" ? "sim3" : "se3") << " alignment)\n";
   }
   std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
-            << "report.json" << (gt ? ", trajectory.png" : "") << ")\n";
+            << "map.dmap, report.json" << (gt ? ", trajectory.png" : "") << ")\n";
   return 0;
 }
 
@@ -249,7 +250,8 @@ const CommandRegistrar kRegistrar({
     "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
     "writes into DIR: trajectory.txt (TUM, every frame), trajectory_kitti.txt, map.ply,\n"
-    "report.json (options, per-frame timings and counts, summary with ATE/RPE/KITTI errors when\n"
+    "map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
+    "per-frame timings and counts, summary with ATE/RPE/KITTI errors when\n"
     "the dataset has ground truth) and trajectory.png (estimate over ground truth).",
     &RunRun,
     __FILE__});

@@ -111,13 +111,14 @@ TEST(SystemE2e, DalaRunIsDeterministicAndWritesEveryOutput) {
                             (dir / out) + " --progress=false > /dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   }
-  for (const char* f : {"trajectory.txt", "trajectory_kitti.txt", "map.ply", "report.json",
-                        "trajectory.png"}) {
+  for (const char* f : {"trajectory.txt", "trajectory_kitti.txt", "map.ply", "map.dmap",
+                        "report.json", "trajectory.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / (std::string("a/") + f))) << f;
   }
   const std::string a = ReadAll(dir / "a/trajectory.txt");
   EXPECT_FALSE(a.empty());
   EXPECT_EQ(a, ReadAll(dir / "b/trajectory.txt"));
+  EXPECT_EQ(ReadAll(dir / "a/map.dmap"), ReadAll(dir / "b/map.dmap"));
   EXPECT_EQ(ReadTrajectory(dir / "a/trajectory.txt").size(), 40u);
   const std::string report = ReadAll(dir / "a/report.json");
   for (const char* key : {"\"summary\"", "\"ate\"", "\"rmse\"", "\"fps\"", "\"ms_p95\"",
