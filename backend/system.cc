@@ -93,12 +93,12 @@ void System::RecordKeyframe() {
   keyframe_records_.push_back(std::move(record));
 }
 
-std::vector<KeyframeInfo> System::keyframes() const {
+std::vector<SavedKeyframe> System::keyframes() const {
   const Trajectory trajectory = estimator_->trajectory();
-  std::vector<KeyframeInfo> out;
+  std::vector<SavedKeyframe> out;
   for (const KeyframeRecord& record : keyframe_records_) {
     CHECK_LT(record.trajectory_index, trajectory.poses.size());
-    KeyframeInfo info;
+    SavedKeyframe info;
     info.frame = stats_[record.trajectory_index].frame;
     info.t_ns = trajectory.poses[record.trajectory_index].t_ns;
     info.T_w_c = trajectory.poses[record.trajectory_index].T_w_c;
@@ -110,9 +110,9 @@ std::vector<KeyframeInfo> System::keyframes() const {
 
 SavedMap System::MapSnapshot() const {
   SavedMap map;
-  for (KeyframeInfo& kf : keyframes()) {
+  map.keyframes = keyframes();
+  for (const SavedKeyframe& kf : map.keyframes) {
     if (!kf.points.empty()) map.descriptor_size = static_cast<int>(kf.points[0].descriptor.size());
-    map.keyframes.push_back({kf.frame, kf.t_ns, kf.T_w_c, std::move(kf.points)});
   }
   for (const MapPoint& p : estimator_->map()) map.landmarks.push_back({p.id, p.p_w, p.observations});
   return map;

@@ -52,16 +52,6 @@ struct FrameStats {
 // that does not exist (e.g. "ba" + "mono"), saying which do.
 std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptions& options);
 
-// A keyframe of the run: the frame the frontend chose as keyframe, its pose now (corrected by
-// later optimisation) and the interest points it keeps for recognition.
-struct KeyframeInfo {
-  FrameId frame;
-  int64_t t_ns = 0;
-  Pose T_w_c = Pose::Identity();
-  // Points with a landmark id: position, orientation, scale and patch descriptor (harris.h).
-  std::vector<SavedKeyframePoint> points;
-};
-
 class System {
  public:
   // Throws dala::Error when the options are invalid or the rig does not suit the mode
@@ -73,8 +63,10 @@ class System {
   // Every frame tracked so far (estimates corrected by later optimisation).
   Trajectory trajectory() const { return estimator_->trajectory(); }
   std::vector<MapPoint> map() const { return estimator_->map(); }
-  // Every keyframe so far, in order, with its current pose.
-  std::vector<KeyframeInfo> keyframes() const;
+  // Every keyframe so far (the frames the frontend chose), in order, with its current pose
+  // (corrected by later optimisation) and its points that belong to a landmark: position,
+  // orientation, scale and patch descriptor (frontend/harris.h).
+  std::vector<SavedKeyframe> keyframes() const;
   const std::vector<FrameStats>& stats() const { return stats_; }
 
   // The map as saved: keyframes (poses, points, descriptors) and landmarks (core/io/map_file.h

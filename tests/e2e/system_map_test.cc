@@ -22,14 +22,14 @@ TEST(SystemMap, SavedMapHoldsKeyframesLandmarksAndDescriptors) {
     System system(seq.rig(), options);
     for (size_t i = 0; i < seq.size(); ++i) system.Track(seq.Render(i));
 
-    const std::vector<KeyframeInfo> keyframes = system.keyframes();
+    const std::vector<SavedKeyframe> keyframes = system.keyframes();
     ASSERT_GE(keyframes.size(), 3u) << estimator;
     EXPECT_EQ(keyframes.front().frame, FrameId(0));
     // The first frame is the world frame; every keyframe pose is close to the ground truth
     // (world = first camera in both), and keyframes are in time order.
     const Pose T_w0_gt_inv = seq.T_w_c0(0).inverse();
     for (size_t k = 0; k < keyframes.size(); ++k) {
-      const KeyframeInfo& kf = keyframes[k];
+      const SavedKeyframe& kf = keyframes[k];
       if (k > 0) {
         EXPECT_LT(keyframes[k - 1].t_ns, kf.t_ns);
       }
