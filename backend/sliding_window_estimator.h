@@ -28,10 +28,14 @@
 
 namespace dala {
 
-// The window options used on sequences. Marginalisation is OFF by default: with the prior the
-// estimate diverges on long sequences (full rendered rover loop, 1000 frames: ATE 1.1-5.5 m for
-// every landmark_exit variant, against 0.067 m with the oldest keyframes held constant). Until
-// that bug is found, `--set ba.use_marginalization=1` turns the prior on (docs/backend.md).
+// The window options used on sequences. Marginalisation is OFF by default (leaving keyframes
+// dropped, oldest window keyframe held): with the prior the window no longer diverges (the gauge
+// bug of issue 4 is fixed: rover loop 1000 frames, ATE 0.075 / 0.094 / 0.096 m for
+// marginalize_all / keep_tracks / drop_tracked, was 1.10 / 5.49 / 1.64 m), but it is still less
+// accurate than prior-off on the rover loop (0.066 m) and a 400-frame flight (0.121 / 0.141 m
+// against 0.098 m); only on KITTI 06 (51 frames) is it better (0.169-0.175 m against 0.183 m).
+// `--set ba.use_marginalization=1` turns the prior on, with landmark_exit = marginalize_all (the
+// best variant on every sequence; numbers and commands: docs/backend.md).
 SlidingWindowBa::Options SequenceBaOptions();
 
 struct SlidingWindowEstimatorOptions {

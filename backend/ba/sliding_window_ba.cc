@@ -62,10 +62,21 @@ void SlidingWindowBa::SetLandmarkPosition(LandmarkId id, const Eigen::Vector3d& 
   landmarks_[id] = p_w;
 }
 
-bool SlidingWindowBa::IsConstant(size_t i) const {
-  if (window_[i].fixed) return true;
-  const bool prior_holds_gauge = options_.use_marginalization && options_.keep_prior;
-  return !prior_holds_gauge && static_cast<int>(i) < num_fixed_;
+bool SlidingWindowBa::IsHeldConstant(size_t i) const {
+  // Gauge of the window optimisation: the oldest num_fixed_ window keyframes, whatever the
+  // marginalisation mode. The prior must NOT be left to hold the gauge. Its information on the
+  // absolute pose of the window (the chain back to the first keyframe) decays as the path grows
+  // (rover loop: smallest eigenvalue 646 at the start, 3.5 after 240 keyframes, against 2e8 for
+  // the largest), so the 6 gauge directions soon fall below the eigenvalue floor or are held by
+  // a stiffness of ~1: a free or nearly free rigid motion of the whole window. The reprojection
+  // factors are exactly invariant to it and the prior, linearised at x_lin in the SO(3) x R^3
+  // tangent, is only approximately so; the small gradient this mismatch leaves along the soft
+  // direction then moves the window by metres in one solve (measured: 3.5 deg, 2.9 m at frame
+  // 818 with a prior cost unchanged at ~7; the trajectory jumps and never comes back).
+  // Holding the oldest keyframe removes the gauge from the solve; the prior still carries its
+  // information: the oldest keyframe's pose enters every marginalisation as a VARIABLE (see
+  // MarginalizeOldest), so its uncertainty is marginalised, not conditioned on.
+  return window_[i].fixed || static_cast<int>(i) < num_fixed_;
 }
 
 void SlidingWindowBa::AddKeyframe(const BaKeyframe& kf) {
@@ -200,10 +211,16 @@ void SlidingWindowBa::MarginalizeOldest() {
     for (KeyframeId id : prior_.keyframes) f.blocks.push_back(block_of.at(id));
     input.factors.push_back(f);
   }
-  if (!IsConstant(0)) input.marginalized_poses.push_back(m.x.data());
+  // Only the first keyframes ever added (`fixed`) are constants of the prior. A keyframe held
+  // constant in the window solves for the gauge (IsHeldConstant) is a variable here: it sits at
+  // its x_lin (it has not moved since the prior that holds it was built), and the prior is the
+  // Gaussian of all window poses relative to the fixed first keyframes, so the leaving pose is
+  // marginalised (Schur complement), not conditioned on. The window solve then conditions the
+  // prior on the next oldest keyframe, which it holds.
+  if (!m.fixed) input.marginalized_poses.push_back(m.x.data());
   for (LandmarkId id : leaving) input.marginalized_landmarks.push_back(landmarks_.at(id).data());
   for (size_t i = 1; i < window_.size(); ++i) {
-    if (!IsConstant(i)) input.kept_poses.push_back({window_[i].id, window_[i].x.data()});
+    if (!window_[i].fixed) input.kept_poses.push_back({window_[i].id, window_[i].x.data()});
   }
   prior_ = options_.keep_prior ? Marginalize(input) : MarginalizationPrior();
 
@@ -244,7 +261,7 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
     ceres::Problem problem(problem_options);
     for (size_t i = 0; i < window_.size(); ++i) {
       problem.AddParameterBlock(window_[i].x.data(), 7, manifold.get());
-      if (IsConstant(i)) problem.SetParameterBlockConstant(window_[i].x.data());
+      if (IsHeldConstant(i)) problem.SetParameterBlockConstant(window_[i].x.data());
     }
     std::set<LandmarkId> active;
     for (KeyframeState& kf : window_) {

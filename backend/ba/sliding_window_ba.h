@@ -25,11 +25,13 @@
 // observations then count twice). A landmark that left the state and is seen again comes back
 // as a new variable initialised at its last estimate. docs/backend.md compares the choices.
 
-// Gauge: the first num_fixed_keyframes keyframes ever added are held constant (default: 1 for a
-// stereo camera, 2 for a mono one, which also fixes the scale by their distance). Their
-// information passes into the prior relative to these constants, so the prior carries the gauge
-// when they leave. With use_marginalization = false (leaving keyframes are dropped), the oldest
-// window keyframes are held constant instead (the same count).
+// Gauge: in every window solve the oldest num_fixed_keyframes window keyframes are held constant
+// (default: 1 for a stereo camera, 2 for a mono one, which also fixes the scale by their
+// distance), in every mode. The first keyframes ever added are constants of the prior too; the
+// later ones are held only in the solves and stay variables of the marginalisation, so the prior
+// is the marginal of all window poses relative to the first keyframes and a solve conditions it
+// on the held ones. The prior must not hold the gauge alone: its absolute information decays
+// along the path until the whole window drifts as a rigid body (issue 4; IsHeldConstant).
 //
 // Not thread-safe. Deterministic: the same inputs and options give bit-identical results
 // (ordered containers, num_threads = 1 by default).
@@ -160,7 +162,7 @@ class SlidingWindowBa {
   bool IsActive(LandmarkId id, const std::map<LandmarkId, int>& counts) const;
   std::map<LandmarkId, int> CountObservations() const;
   bool TriangulateMono(LandmarkId id, Eigen::Vector3d* p_w) const;
-  bool IsConstant(size_t window_index) const;
+  bool IsHeldConstant(size_t window_index) const;  // in the window solves (the gauge).
 
   StereoIntrinsics K_;
   Options options_;

@@ -100,15 +100,15 @@ TEST(SlidingWindowBaTest, BatchStereoConverges) {
   EXPECT_EQ(summary.num_keyframes, 24);
 }
 
-TEST(SlidingWindowBaTest, WindowWithPriorStaysCloseToBatchAndThePriorHoldsTheGauge) {
+TEST(SlidingWindowBaTest, WindowWithPriorStaysCloseToBatch) {
   const BaScene scene = MakeBaScene(SmallScene());
   SlidingWindowBa::Options options;
   const double ate_batch = AlignedAte(RunBatch(scene, options, 7), scene.T_w_c_gt);
   SlidingWindowBa ba(scene.K, options);
   const double ate_window = AlignedAte(RunSequential(scene, options, 7, &ba), scene.T_w_c_gt);
   EXPECT_LT(ate_window, 2.0 * ate_batch + 0.005) << "batch " << ate_batch;
-  // The gauge keyframe (0) left long ago: only the prior ties the window to the world. It has
-  // full rank on the 7 remaining older poses, and the window's ABSOLUTE error stays small.
+  // The gauge keyframe (0) left long ago: the prior, relative to it, has full rank on the 7
+  // remaining older poses, and the window's ABSOLUTE error stays small.
   EXPECT_EQ(ba.prior().rank(), 6 * (options.window_size - 1));
   for (KeyframeId id : ba.WindowKeyframes()) {
     const Pose& gt = scene.T_w_c_gt[id.value];
@@ -123,6 +123,33 @@ TEST(SlidingWindowBaTest, WindowWithPriorStaysCloseToBatchAndThePriorHoldsTheGau
   RecordProperty("ate_batch_mm", std::to_string(ate_batch * 1e3));
   RecordProperty("ate_window_mm", std::to_string(ate_window * 1e3));
   RecordProperty("ate_no_prior_mm", std::to_string(ate_ablation * 1e3));
+}
+
+// Regression (issue 4, rover loop ATE 1.1-5.5 m with the prior): on a long run the prior's
+// information on the ABSOLUTE pose of the window decays until its gauge directions fall below the
+// eigenvalue floor (rover loop: after ~250 keyframes). When the prior was left to hold the gauge,
+// the window then moved freely as a rigid body (3.5 deg, 2.9 m in one solve). A higher floor
+// puts this short scene in that state from the start; the window must still stay put because
+// its oldest keyframe holds the gauge. (Measured: 2.3 m maximum error with the old gauge handling,
+// 2 cm now.)
+TEST(SlidingWindowBaTest, WindowDoesNotDriftWhenThePriorLosesItsGaugeDirections) {
+  BaSceneOptions so;
+  so.num_keyframes = 30;
+  so.num_points = 400;
+  so.seed = 3;
+  const BaScene scene = MakeBaScene(so);
+  SlidingWindowBa::Options options;
+  options.prior_eigenvalue_floor = 1e-5;
+  SlidingWindowBa ba(scene.K, options);
+  const auto est = RunSequential(scene, options, 5, &ba);
+  // The scenario: the prior has lost directions (the gauge, as on the long run).
+  EXPECT_LT(ba.prior().rank(), 6 * (options.window_size - 1));
+  double max_err = 0.0;
+  for (size_t i = 0; i < est.size(); ++i) {
+    max_err = std::max(max_err, (est[i].translation() - scene.T_w_c_gt[i].translation()).norm());
+  }
+  EXPECT_LT(max_err, 0.05);  // no alignment: keyframe 0 is held at the truth.
+  RecordProperty("max_error_mm", std::to_string(max_err * 1e3));
 }
 
 TEST(SlidingWindowBaTest, TrackFrameAgainstTheWindowMap) {
