@@ -73,7 +73,7 @@ struct PlaceRecognitionOptions {
   // Spatial gate on the dead-reckoned positions (see the file comment); false: appearance only.
   bool spatial_gate = true;
   double gate_radius_m = 5.0;
-  double gate_fraction = 0.1;
+  double gate_fraction = 0.05;
   // Verification: matcher (no prior) and PnP (RANSAC + refinement, seeded).
   MatcherOptions matcher;
   MotionEstimatorOptions pnp = DefaultPnpOptions();
