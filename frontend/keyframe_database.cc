@@ -18,9 +18,8 @@ void KeyframeDatabase::Add(KeyframeEntry entry) {
 }
 
 const KeyframeEntry* KeyframeDatabase::Find(FrameId frame) const {
-  const auto it = std::lower_bound(
-      entries_.begin(), entries_.end(), frame,
-      [](const KeyframeEntry& e, FrameId f) { return e.frame < f; });
+  const auto it = std::lower_bound(entries_.begin(), entries_.end(), frame,
+                                   [](const KeyframeEntry& e, FrameId f) { return e.frame < f; });
   return it != entries_.end() && it->frame == frame ? &*it : nullptr;
 }
 

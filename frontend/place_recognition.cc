@@ -5,9 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <unordered_set>
-
 #include <opencv2/imgproc.hpp>
+#include <unordered_set>
 
 namespace dala {
 
@@ -132,9 +131,8 @@ KeyframeEntry PlaceRecognition::MakeEntry(FrameId frame, int64_t t_ns, const Pos
 bool PlaceRecognition::WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
                                   const Eigen::Vector3d& t_w_cur) const {
   if (!options_.spatial_gate) return true;
-  const double radius =
-      options_.gate_radius_m +
-      options_.gate_fraction * std::abs(query.path_length_m - old.path_length_m);
+  const double radius = options_.gate_radius_m +
+                        options_.gate_fraction * std::abs(query.path_length_m - old.path_length_m);
   return (t_w_cur - query.T_w_c.translation()).norm() <= radius;
 }
 
@@ -209,8 +207,7 @@ std::optional<PlaceMatch> PlaceRecognition::Detect(
         ++stats_.gated_out;
         continue;
       }
-      const double score =
-          AppearanceScore(e.global_descriptor, query.global_descriptor, options_);
+      const double score = AppearanceScore(e.global_descriptor, query.global_descriptor, options_);
       if (score > stats_.best_score) {
         stats_.best_score = score;
         stats_.best_frame = e.frame;
@@ -233,8 +230,8 @@ std::optional<PlaceMatch> PlaceRecognition::Detect(
       }
     }
   }
-  stats_.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                  .count();
+  stats_.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return found;
 }
 

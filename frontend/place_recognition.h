@@ -102,7 +102,7 @@ struct PlaceRecognitionStats {
   int candidates = 0;           // Verified (top_k above the score).
   double best_score = -1.0;     // Best appearance score among the old-enough entries.
   FrameId best_frame;           // Its keyframe.
-  int best_inliers = 0;         // Best PnP inlier count among the candidates.
+  int best_inliers = 0;         // Inliers of the accepted loop (0: none).
   bool rejected_by_gate = false;  // A candidate passed PnP but its pose failed the gate.
   double ms = 0.0;              // Wall time of Detect().
 };

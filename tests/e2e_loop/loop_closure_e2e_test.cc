@@ -83,7 +83,7 @@ TEST(LoopClosureE2e, SmallLoopIsClosedAndAteDrops) {
             << run.loops_detected << ", closed " << run.loops_closed << std::endl;
   EXPECT_EQ(run.lost, 0);
   EXPECT_EQ(run.loops_closed, run.loops_detected);
-  EXPECT_LT(closed, 0.7 * open);  // Measured: 0.072 -> 0.032 m.
+  EXPECT_LT(closed, 0.7 * open);                            // Measured: 0.072 -> 0.032 m.
   EXPECT_LT(run.eval.ate.translation.rmse / path, 0.0004);  // Measured: 0.024 %.
 }
 

@@ -62,10 +62,10 @@ TEST(PlaceRecognition, AppearanceScoreRanksTheSamePlaceFirst) {
       a, PlaceRecognition::GlobalDescriptor(seq.Render(seq.size() - 2).left, options), options);
   double best_elsewhere = -1;
   for (size_t i = seq.size() / 8; i < 7 * seq.size() / 8; i += seq.size() / 16) {
-    best_elsewhere = std::max(
-        best_elsewhere,
-        PlaceRecognition::AppearanceScore(
-            a, PlaceRecognition::GlobalDescriptor(seq.Render(i).left, options), options));
+    best_elsewhere =
+        std::max(best_elsewhere,
+                 PlaceRecognition::AppearanceScore(
+                     a, PlaceRecognition::GlobalDescriptor(seq.Render(i).left, options), options));
   }
   std::cout << "[ measured ] revisit score " << revisit << ", best elsewhere " << best_elsewhere
             << std::endl;
@@ -141,8 +141,7 @@ TEST(PlaceRecognition, NoLoopHalfWayRound) {
   }
   const size_t n = seq.size() / 2;
   const View cur = MakeView(seq, n, 900000000);
-  EXPECT_FALSE(
-      pr.Detect(Entry(pr, cur, cur.T_w_c, 60), cur.detection, cur.stereo, cur.landmark));
+  EXPECT_FALSE(pr.Detect(Entry(pr, cur, cur.T_w_c, 60), cur.detection, cur.stereo, cur.landmark));
 }
 
 // false_loop: x = 50 m and x = 150 m are the same buildings. Matcher and PnP verify the
@@ -182,8 +181,8 @@ TEST(PlaceRecognition, LookAlikePlaceIsRejectedByTheSpatialGate) {
   EXPECT_EQ(pr.last_stats().searched, 1);
   EXPECT_EQ(pr.last_stats().gated_out, 1);
   bool rejected = false;
-  EXPECT_FALSE(pr.Verify(pr.database().entries()[0], query, cur.detection, cur.stereo,
-                         cur.landmark, &rejected));
+  EXPECT_FALSE(pr.Verify(pr.database().entries()[0], query, cur.detection, cur.stereo, cur.landmark,
+                         &rejected));
   EXPECT_TRUE(rejected);
 }
 
