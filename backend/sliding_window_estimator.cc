@@ -14,8 +14,18 @@ SlidingWindowBa::Options SequenceBaOptions() {
   return options;
 }
 
+bool BaLoopClosureOptions::IsValid(std::string* why) const {
+  if (!pose_graph.IsValid(why)) return false;
+  if (!(rot_sigma0 > 0 && trans_sigma0 > 0 && rot_sigma_per_m >= 0 && trans_sigma_per_m >= 0 &&
+        loop_min_sigma_rot > 0 && loop_min_sigma_trans > 0)) {
+    if (why) *why = "loop edge sigmas must be > 0 (the per-metre ones >= 0)";
+    return false;
+  }
+  return true;
+}
+
 bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
-  if (!ba.IsValid(why)) return false;
+  if (!ba.IsValid(why) || !loop.IsValid(why)) return false;
   const auto fail = [&](const char* msg) {
     if (why) *why = msg;
     return false;
@@ -28,6 +38,30 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
 }
 
 namespace {
+
+// Information matrices of the pose-graph edges ([rotation; translation], core/geometry.h).
+struct LoopClosureInformation {
+  BaLoopClosureOptions o;
+  Matrix6d Odometry(const Pose& T_a_b) const {
+    const double d = T_a_b.translation().norm();
+    return Diagonal(o.rot_sigma0 + o.rot_sigma_per_m * d, o.trans_sigma0 + o.trans_sigma_per_m * d);
+  }
+  Matrix6d Loop(const Matrix6d& cov) const {
+    Matrix6d floored = 0.5 * (cov + cov.transpose());
+    for (int i = 0; i < 6; ++i) {
+      const double floor = i < 3 ? o.loop_min_sigma_rot : o.loop_min_sigma_trans;
+      floored(i, i) += floor * floor;
+    }
+    return floored.inverse();
+  }
+  static Matrix6d Diagonal(double sigma_rot, double sigma_trans) {
+    Vector6d d;
+    d << Eigen::Vector3d::Constant(1 / (sigma_rot * sigma_rot)),
+        Eigen::Vector3d::Constant(1 / (sigma_trans * sigma_trans));
+    return d.asDiagonal();
+  }
+};
+
 StereoIntrinsics IntrinsicsOf(const StereoRig& rig) {
   StereoIntrinsics K;
   K.fx = rig.left.fx;
@@ -102,9 +136,65 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
     ++added;
     out.push_back(ToBa(*o));
     ba_.SetLandmarkPosition(o->landmark, T_w_c * o->p_c0);
+    anchor_.emplace(o->landmark, KeyframeId(num_keyframes_ - 1));
   }
   for (const BaObservation& b : out) ++landmark_observations_[b.landmark];
   return out;
+}
+
+bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur_id,
+                                       Pose* T_w_c) {
+  const auto old = keyframe_of_frame_.find(loop.old_frame);
+  if (old == keyframe_of_frame_.end()) {
+    LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
+    return false;
+  }
+  // Nodes: every keyframe at its current estimate, and the new one.
+  std::map<KeyframeId, Pose> T_w_kf;
+  for (const auto& [id, pose] : keyframe_poses_) T_w_kf[id] = KeyframePoseNow(id);
+  T_w_kf[cur_id] = *T_w_c;
+  const LoopClosureInformation info = {options_.loop};
+  std::vector<PoseGraphEdge> edges;
+  for (auto it = T_w_kf.begin(); std::next(it) != T_w_kf.end(); ++it) {
+    const auto next = std::next(it);
+    PoseGraphEdge e;
+    e.from = it->first;
+    e.to = next->first;
+    e.T_from_to = it->second.inverse() * next->second;
+    e.information = info.Odometry(e.T_from_to);
+    edges.push_back(e);
+  }
+  PoseGraphEdge loop_edge;
+  loop_edge.from = old->second;
+  loop_edge.to = cur_id;
+  loop_edge.T_from_to = loop.T_old_cur;
+  loop_edge.information = info.Loop(loop.cov);
+  loop_edge.is_loop = true;
+  edges.insert(edges.end(), loop_edges_.begin(), loop_edges_.end());
+  edges.push_back(loop_edge);
+  PoseGraphSummary summary;
+  const std::map<KeyframeId, Pose> corrected =
+      OptimizePoseGraph(T_w_kf, edges, options_.loop.pose_graph, &summary);
+  if (!summary.usable) {
+    LOG(WARNING) << "loop pose graph failed: loop to frame " << loop.old_frame << " ignored";
+    return false;
+  }
+  loop_edges_.push_back(loop_edge);
+  VLOG(1) << "loop closed: keyframe " << loop_edge.from << " (frame " << loop.old_frame
+          << ") -> new keyframe " << cur_id << ", " << loop.inliers << " inliers, pose graph cost "
+          << summary.initial_cost << " -> " << summary.final_cost << ", current moved by "
+          << (corrected.at(cur_id).translation() - T_w_c->translation()).norm() << " m";
+  // Landmarks move with their anchor keyframe: p_w_new = T_w_a_new T_w_a_old^-1 p_w_old.
+  for (const auto& [id, a] : anchor_) {
+    const Pose delta = corrected.at(a) * T_w_kf.at(a).inverse();
+    if (const auto p_w = ba_.LandmarkPosition(id)) ba_.SetLandmarkPosition(id, delta * *p_w);
+    const auto it = map_points_.find(id);
+    if (it != map_points_.end()) it->second = delta * it->second;
+  }
+  for (auto& [id, pose] : keyframe_poses_) pose = corrected.at(id);
+  ba_.ApplyCorrection(corrected);
+  *T_w_c = corrected.at(cur_id);
+  return true;
 }
 
 Pose SlidingWindowEstimator::KeyframePoseNow(KeyframeId id) const {
@@ -130,6 +220,9 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     }
   }
   if (first || m.is_keyframe) {
+    if (m.loop && options_.loop.enable && !first) {
+      out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
+    }
     if (!first) {
       // Refine the guess against the window before the keyframe joins it.
       const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(m), T_w_c, options_.pose_only);
@@ -149,6 +242,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     keyframe_poses_[kf.id] = KeyframePoseNow(kf.id);
     T_w_c = keyframe_poses_[kf.id];
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});
+    keyframe_of_frame_[m.frame] = kf.id;
   } else {
     const KeyframeId ref(num_keyframes_ - 1);
     frames_.push_back({m.t_ns, ref, KeyframePoseNow(ref).inverse() * T_w_c});

@@ -17,11 +17,28 @@
 // Motion prior: the frontend's visual motion T_prev_cur chains the previous frame's estimate
 // into the initial guess of each frame; when the pose-only optimisation fails the guess is kept
 // (the frame is then reported invalid).
+//
+// Loop closure (a keyframe measurement with `loop`, options.loop.enable): before the keyframe
+// joins the window, an SE(3) pose graph over ALL keyframes (backend/ba/pose_graph.h, gauge: the
+// first keyframe) is solved with
+//   - consecutive edges k -> k+1: the relative pose of the current estimates, information from a
+//     drift model: sigma_rot = rot_sigma0 + rot_sigma_per_m * d, sigma_trans = trans_sigma0 +
+//     trans_sigma_per_m * d (d = |t_k_k+1|), i.e. the visual-odometry/BA drift grows with the
+//     distance travelled (the BA's marginal covariances would cost a Schur complement per
+//     keyframe for an information the pose graph only uses relatively);
+//   - every loop edge so far (old -> current, the frontend's PnP T_old_cur, covariance the PnP's
+//     with a floor of loop_min_sigma_rot/trans, since RANSAC-PnP covariances are optimistic).
+// Then keyframe_poses_ and the window take the corrected poses (SlidingWindowBa::ApplyCorrection,
+// which drops the marginalisation prior if any), every landmark moves with its anchor keyframe
+// (the keyframe that added it): p_w_new = T_w_a_new T_w_a_old^-1 p_w_old, and frames between
+// keyframes follow (stored relative to keyframes). The relabelled observations (old landmark
+// ids) then join the window at the moved positions.
 
 #include <map>
 #include <string>
 #include <vector>
 
+#include "backend/ba/pose_graph.h"
 #include "backend/ba/sliding_window_ba.h"
 #include "backend/estimator.h"
 #include "core/camera.h"
@@ -38,6 +55,22 @@ namespace dala {
 // best variant on every sequence; numbers and commands: docs/backend.md).
 SlidingWindowBa::Options SequenceBaOptions();
 
+// How the sliding-window estimator closes loops (see the class comment).
+struct BaLoopClosureOptions {
+  bool enable = true;  // false: loop detections are ignored (the relabelled ids still arrive).
+  PoseGraphOptions pose_graph;
+  // Drift model of consecutive keyframe edges: sigma = sigma0 + per_m * distance (rad, m).
+  double rot_sigma0 = 1e-3;
+  double rot_sigma_per_m = 5e-4;
+  double trans_sigma0 = 0.01;
+  double trans_sigma_per_m = 0.01;
+  // Floor on the loop edge's standard deviations (rad, m).
+  double loop_min_sigma_rot = 2e-3;
+  double loop_min_sigma_trans = 0.02;
+
+  bool IsValid(std::string* why) const;
+};
+
 struct SlidingWindowEstimatorOptions {
   SlidingWindowBa::Options ba = SequenceBaOptions();
   PoseOnlyOptions pose_only;
@@ -46,6 +79,7 @@ struct SlidingWindowEstimatorOptions {
   int grid_rows = 5;
   // Landmarks farther than this (camera frame) are not added: weak constraints on translation.
   double max_landmark_depth_m = 60.0;
+  BaLoopClosureOptions loop;
 
   bool IsValid(std::string* why) const;
 };
@@ -63,6 +97,7 @@ class SlidingWindowEstimator : public Estimator {
 
   const SlidingWindowBa& ba() const { return ba_; }
   int num_keyframes() const { return num_keyframes_; }
+  int num_loops_closed() const { return static_cast<int>(loop_edges_.size()); }
 
  private:
   struct FrameRecord {
@@ -74,6 +109,10 @@ class SlidingWindowEstimator : public Estimator {
   std::vector<BaObservation> SelectKeyframeObservations(const FrameMeasurement& m,
                                                         const Pose& T_w_c);
   std::vector<BaObservation> WindowObservations(const FrameMeasurement& m) const;
+  // Solves the pose graph with the new loop edge (old keyframe -> the keyframe `cur_id` about
+  // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame
+  // is not a keyframe or the solve fails.
+  bool CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
 
   StereoRig rig_;
   SlidingWindowEstimatorOptions options_;
@@ -82,6 +121,9 @@ class SlidingWindowEstimator : public Estimator {
   std::map<KeyframeId, Pose> keyframe_poses_;  // Last estimate of every keyframe.
   std::map<LandmarkId, int> landmark_observations_;
   std::map<LandmarkId, Eigen::Vector3d> map_points_;  // Last estimate of every landmark.
+  std::map<LandmarkId, KeyframeId> anchor_;            // The keyframe that added the landmark.
+  std::map<FrameId, KeyframeId> keyframe_of_frame_;
+  std::vector<PoseGraphEdge> loop_edges_;              // Every loop closed so far.
   Pose T_w_prev_ = Pose::Identity();
   Pose velocity_ = Pose::Identity();
   int num_keyframes_ = 0;

@@ -56,6 +56,8 @@ TrackResult System::Track(const Frame& frame) {
   s.features = static_cast<int>(m.observations.size());
   for (const FeatureObservation& o : m.observations) s.tracked += o.track_length > 1;
   s.landmarks = e.landmarks_in_state;
+  s.loop = m.loop.has_value();
+  s.loop_closed = e.loop_closed;
   s.frontend = m.timings;
   s.estimator_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
   s.total_ms = std::chrono::duration<double, std::milli>(t2 - t0).count();

@@ -43,6 +43,8 @@ struct FrameStats {
   int features = 0;
   int tracked = 0;    // Observations continuing a track.
   int landmarks = 0;  // In the estimator's state.
+  bool loop = false;         // The frontend recognised a place (measurement.loop).
+  bool loop_closed = false;  // The estimator corrected the trajectory with it.
   FrontendTimings frontend;
   double estimator_ms = 0;
   double total_ms = 0;

@@ -34,7 +34,8 @@ struct SystemOptions {
 };
 
 // Visits every settable option as (section, key, pointer). Sections: "" (top level), "harris",
-// "matcher" (tracking), "stereo", "motion", "keyframe", "frontend", "ba",
+// "matcher" (tracking), "stereo", "motion", "keyframe", "frontend", "loop" (place recognition
+// and the BA's loop correction), "ba",
 // "ekf_stereo", "ekf_mono".
 class OptionVisitor {
  public:

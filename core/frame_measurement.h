@@ -56,6 +56,7 @@ struct MotionEstimate {
 // Time spent in each frontend stage for this frame, milliseconds.
 struct FrontendTimings {
   double detect_ms = 0, stereo_ms = 0, track_ms = 0, motion_ms = 0, total_ms = 0;
+  double loop_ms = 0;  // Place recognition (keyframes only).
 };
 
 // A place recognised by the frontend at this keyframe: an old keyframe seen again, verified by

@@ -50,7 +50,7 @@ HarrisOptions SequenceHarrisOptions() {
 
 bool FrontendOptions::IsValid(std::string* why) const {
   if (!harris.IsValid(why) || !stereo.IsValid(why) || !tracking_matcher.IsValid(why) ||
-      !motion.IsValid(why) || !keyframe.IsValid(why)) {
+      !motion.IsValid(why) || !keyframe.IsValid(why) || !loop.IsValid(why)) {
     return false;
   }
   const auto fail = [&](const char* msg) {
@@ -67,7 +67,8 @@ Frontend::Frontend(const StereoRig& rig, const FrontendOptions& options)
     : rig_(rig),
       options_(options),
       motion_estimator_(rig, options.motion),
-      keyframe_policy_(options.keyframe) {
+      keyframe_policy_(options.keyframe),
+      place_recognition_(rig, options.loop) {
   std::string why;
   CHECK(options_.IsValid(&why)) << why;
   CHECK(rig_.left.IsValid(&why)) << why;
@@ -184,6 +185,28 @@ void Frontend::ReacquireFromKeyframe(TrackedFrame* cur) const {
   }
 }
 
+std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame, TrackedFrame* cur) {
+  KeyframeEntry entry = place_recognition_.MakeEntry(frame.id, frame.t_ns, cur->T_w_c,
+                                                     path_length_m_, frame.left, cur->detection,
+                                                     cur->stereo, cur->landmark);
+  std::optional<PlaceMatch> match =
+      place_recognition_.Detect(entry, cur->detection, cur->stereo, cur->landmark);
+  if (match) {
+    std::unordered_map<LandmarkId, LandmarkId> old_of;
+    for (size_t k = 0; k < match->current_point.size(); ++k) {
+      cur->landmark[match->current_point[k]] = match->loop.relabelled[k].second;
+      old_of[match->loop.relabelled[k].first] = match->loop.relabelled[k].second;
+    }
+    for (LandmarkId& id : entry.landmark) {
+      const auto it = old_of.find(id);
+      if (it != old_of.end()) id = it->second;
+    }
+  }
+  place_recognition_.Add(std::move(entry));
+  if (!match) return std::nullopt;
+  return match->loop;
+}
+
 FrameMeasurement Frontend::Process(const Frame& frame) {
   CHECK_EQ(frame.left.type(), CV_8UC1) << "Frontend::Process expects 8-bit grey images";
   CHECK(frame.left.cols == rig_.left.width && frame.left.rows == rig_.left.height)
@@ -236,6 +259,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     }
     // Lost: assume the last velocity for this frame (the gap is flagged by the status).
     cur.T_w_c = Orthonormalized(prev_->T_w_c * velocity_T_prev_cur_);
+    path_length_m_ += (cur.T_w_c.translation() - prev_->T_w_c.translation()).norm();
     out.status = motion ? TrackingStatus::kTracking : TrackingStatus::kLost;
   } else {
     out.status = TrackingStatus::kInitializing;
@@ -279,7 +303,14 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     out.is_keyframe = keyframe_policy_.IsKeyframe(evidence);
   }
 
-  // 5. The measurement.
+  // 5. Loop detection at keyframes (relabels the recognised points before they are output).
+  if (out.is_keyframe && stereo && options_.loop.enable) {
+    t0 = Clock::now();
+    out.loop = DetectLoop(frame, &cur);
+    out.timings.loop_ms = MsSince(t0);
+  }
+
+  // 6. The measurement.
   out.observations.reserve(n);
   for (size_t i = 0; i < n; ++i) {
     FeatureObservation o;

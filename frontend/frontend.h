@@ -15,6 +15,11 @@
 // points without an inherited id are matched to the last keyframe (re-acquiring landmarks
 // lost for a few frames), and the rest start new landmarks.
 //
+// Loop detection (stereo, options.loop.enable): every keyframe is searched for in the keyframe
+// database (frontend/place_recognition.h) and then added to it. On a verified loop the
+// measurement carries a LoopDetection, and the current points matched to the old keyframe's
+// points (PnP inliers) take the OLD landmark ids; the tracks continue under those ids.
+//
 // Usage:
 //   dala::Frontend frontend(dataset->rig(), dala::FrontendOptions());
 //   dala::Frame frame;
@@ -36,6 +41,7 @@
 #include "frontend/keyframe_policy.h"
 #include "frontend/matcher.h"
 #include "frontend/motion_estimator.h"
+#include "frontend/place_recognition.h"
 #include "frontend/stereo.h"
 #include "frontend/worker_thread.h"
 
@@ -61,6 +67,9 @@ struct FrontendOptions {
   double keyframe_gate_px = 3.0;
   // Detect the right image in a second thread (does not change the result).
   bool parallel_detection = true;
+  // Loop detection at keyframes (stereo): place recognition + relabelling of the recognised
+  // landmarks with their old ids (frontend/place_recognition.h).
+  PlaceRecognitionOptions loop;
 
   bool IsValid(std::string* why) const;
 };
@@ -79,6 +88,9 @@ class Frontend {
   const Pose& dead_reckoning_T_w_c() const { return T_w_cur_; }
 
   const StereoRig& rig() const { return rig_; }
+  // The keyframe database and the last search's statistics.
+  const PlaceRecognition& place_recognition() const { return place_recognition_; }
+  PlaceRecognition* mutable_place_recognition() { return &place_recognition_; }
 
   // The current keyframe (the last frame whose measurement had is_keyframe): its interest points
   // with their patch descriptors, and each point's landmark id (invalid: none). Null before the
@@ -107,16 +119,20 @@ class Frontend {
   // Inherits ids from `prev` through the motion inliers; returns the motion, if any.
   std::optional<MotionEstimate> TrackFromPrevious(TrackedFrame* cur);
   void ReacquireFromKeyframe(TrackedFrame* cur) const;
+  // At a keyframe: searches the database, relabels the recognised points, adds the keyframe.
+  std::optional<LoopDetection> DetectLoop(const Frame& frame, TrackedFrame* cur);
 
   StereoRig rig_;
   FrontendOptions options_;
   MotionEstimator motion_estimator_;
   KeyframePolicy keyframe_policy_;
+  PlaceRecognition place_recognition_;
   WorkerThread detection_worker_;  // Detects the right image (persistent: keeps its scratch).
   std::optional<TrackedFrame> prev_;
   std::optional<TrackedFrame> keyframe_;
   Pose velocity_T_prev_cur_ = Pose::Identity();
   Pose T_w_cur_ = Pose::Identity();
+  double path_length_m_ = 0.0;  // Dead-reckoned distance travelled.
   int64_t next_landmark_ = 0;
   int frames_since_keyframe_ = 0;
 };

@@ -94,11 +94,14 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"features", s.features},
           {"tracked", s.tracked},
           {"landmarks", s.landmarks},
+          {"loop", s.loop},
+          {"loop_closed", s.loop_closed},
           {"ms",
            {{"detect", s.frontend.detect_ms},
             {"stereo", s.frontend.stereo_ms},
             {"track_motion", s.frontend.motion_ms},
             {"reacquire", s.frontend.track_ms},
+            {"loop", s.frontend.loop_ms},
             {"frontend", s.frontend.total_ms},
             {"estimator", s.estimator_ms},
             {"total", s.total_ms}}}};
@@ -117,6 +120,7 @@ nlohmann::json StageTable(const std::vector<FrameStats>& stats) {
           {"stereo", column([](const FrameStats& s) { return s.frontend.stereo_ms; })},
           {"track_motion", column([](const FrameStats& s) { return s.frontend.motion_ms; })},
           {"reacquire", column([](const FrameStats& s) { return s.frontend.track_ms; })},
+          {"loop", column([](const FrameStats& s) { return s.frontend.loop_ms; })},
           {"frontend", column([](const FrameStats& s) { return s.frontend.total_ms; })},
           {"estimator", column([](const FrameStats& s) { return s.estimator_ms; })},
           {"total", column([](const FrameStats& s) { return s.total_ms; })}};
@@ -184,9 +188,13 @@ int RunRun(const std::vector<std::string>& args) {
 
   const auto& stats = system.stats();
   std::vector<double> total_ms;
-  int failures = 0, keyframes = 0;
+  int failures = 0, keyframes = 0, loops = 0, loops_closed = 0;
+  std::vector<double> loop_ms;  // Place recognition, per keyframe.
   for (const FrameStats& s : stats) {
     total_ms.push_back(s.total_ms);
+    loops += s.loop;
+    loops_closed += s.loop_closed;
+    if (s.keyframe) loop_ms.push_back(s.frontend.loop_ms);
     failures += s.status == TrackingStatus::kLost;
     keyframes += s.keyframe;
   }
@@ -200,6 +208,12 @@ int RunRun(const std::vector<std::string>& args) {
       {"stages_ms", StageTable(stats)},
       {"tracking_failures", failures},
       {"keyframes", keyframes},
+      {"loops_detected", loops},
+      {"loops_closed", loops_closed},
+      {"loop_ms_per_keyframe",
+       {{"median", Percentile(loop_ms, 0.5)},
+        {"p95", Percentile(loop_ms, 0.95)},
+        {"max", loop_ms.empty() ? 0.0 : *std::max_element(loop_ms.begin(), loop_ms.end())}}},
       {"landmarks", points.size()}};
   const auto& gt = dataset->ground_truth();
   if (gt && !gt->empty()) {
@@ -229,7 +243,7 @@ int RunRun(const std::vector<std::string>& args) {
   WriteFileAtomically(dir + "/report.json", [&](std::ostream& os) { os << report.dump(1) << "\n"; });
 
   std::cout << "frames      " << stats.size() << " (" << failures << " lost, " << keyframes
-            << " keyframes)\n"
+            << " keyframes, " << loops << " loops detected, " << loops_closed << " closed)\n"
             << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
             << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {

@@ -13,7 +13,7 @@
 
 DECLARE_string(out);  // tools/common_flags.cc
 DEFINE_string(preset, "rover_loop",
-              "scene and camera path: rover_loop, flight, rotation, fast, low_texture, false_loop");
+              "scene and camera path: rover_loop, flight, rotation, fast, low_texture, small_loop, false_loop");
 DEFINE_int32(frames, 0, "number of frames (0 = the preset's default duration x fps)");
 DEFINE_uint64(seed, 1, "seed of the scene, textures and noise (same seed -> identical output)");
 DEFINE_bool(mono, false, "render the left camera only (no image_1)");

@@ -94,6 +94,17 @@ void SlidingWindowBa::AddKeyframe(const BaKeyframe& kf) {
   InitializeStereoLandmarks(window_.back());
 }
 
+void SlidingWindowBa::ApplyCorrection(const std::map<KeyframeId, Pose>& T_w_kf) {
+  for (KeyframeState& kf : window_) {
+    const auto it = T_w_kf.find(kf.id);
+    if (it != T_w_kf.end()) kf.x = PoseToBlock(it->second);
+  }
+  if (!prior_.empty()) {
+    prior_ = MarginalizationPrior();
+    if (!window_.empty()) window_.front().fixed = true;
+  }
+}
+
 void SlidingWindowBa::InitializeStereoLandmarks(const KeyframeState& kf) {
   const Pose T_w_c = BlockToPose(kf.x);
   for (const BaObservation& obs : kf.observations) {

@@ -131,6 +131,14 @@ class SlidingWindowBa {
   // is marginalised (or dropped) first, at the current estimate. CHECKs that ids increase.
   void AddKeyframe(const BaKeyframe& kf);
 
+  // Loop closure (a pose graph moved the keyframes): sets the window keyframes found in
+  // `T_w_kf` to their corrected poses (the others are not in the window: ignored) and drops the
+  // marginalisation prior, which was linearised at the old poses and held the old gauge (moving
+  // its linearisation points consistently is not worth it for a prior that is off by default);
+  // the oldest window keyframe is then held constant, carrying the gauge as the first keyframe
+  // did. The caller moves the landmarks (SetLandmarkPosition).
+  void ApplyCorrection(const std::map<KeyframeId, Pose>& T_w_kf);
+
   // Optimises the window: solve, reject outliers, re-solve.
   Summary Optimize();
 

@@ -30,7 +30,8 @@
 namespace dala::sim {
 
 struct SimOptions {
-  // One of PresetNames(): rover_loop, flight, rotation, fast, low_texture, false_loop.
+  // One of PresetNames(): rover_loop, flight, rotation, fast, low_texture, small_loop,
+  // false_loop.
   std::string preset = "rover_loop";
   // Number of frames; 0 = the preset's default duration times fps.
   int frames = 0;

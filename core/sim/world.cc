@@ -41,24 +41,27 @@ Pose CameraPose(const Eigen::Vector3d& p_w, double yaw, double pitch, double rol
 // flat along the sides, turning at the four corners; counter-clockwise.
 constexpr double kLoopA = 38.0, kLoopB = 24.0;
 
-Eigen::Vector2d LoopPoint(double th) {
-  return {1.2 * kLoopA * (std::cos(th) - std::cos(3 * th) / 6),
-          1.2 * kLoopB * (std::sin(th) + std::sin(3 * th) / 6)};
+// `scale` shrinks the circuit (the small_loop preset: 0.5).
+Eigen::Vector2d LoopPoint(double th, double scale = 1.0) {
+  return {scale * 1.2 * kLoopA * (std::cos(th) - std::cos(3 * th) / 6),
+          scale * 1.2 * kLoopB * (std::sin(th) + std::sin(3 * th) / 6)};
 }
-Eigen::Vector2d LoopTangent(double th) {
-  return {1.2 * kLoopA * (-std::sin(th) + std::sin(3 * th) / 2),
-          1.2 * kLoopB * (std::cos(th) + std::cos(3 * th) / 2)};
+Eigen::Vector2d LoopTangent(double th, double scale = 1.0) {
+  return {scale * 1.2 * kLoopA * (-std::sin(th) + std::sin(3 * th) / 2),
+          scale * 1.2 * kLoopB * (std::cos(th) + std::cos(3 * th) / 2)};
 }
+constexpr double kSmallLoopScale = 0.5;
 
 // Ground rover around the loop, once per `period` seconds; `jerk` adds fast wobbles of the
 // heading, pitch, roll, height and a lateral offset (the `fast` preset).
 class LoopPath : public CameraPath {
  public:
-  LoopPath(double period, bool jerk) : period_(period), jerk_(jerk) {}
+  LoopPath(double period, bool jerk, double scale = 1.0)
+      : period_(period), jerk_(jerk), scale_(scale) {}
   Pose T_w_c(double t) const override {
     const double th = 2 * M_PI * t / period_;
-    const Eigen::Vector2d p = LoopPoint(th);
-    const Eigen::Vector2d d = LoopTangent(th);
+    const Eigen::Vector2d p = LoopPoint(th, scale_);
+    const Eigen::Vector2d d = LoopTangent(th, scale_);
     double yaw = std::atan2(d.y(), d.x());
     double pitch = 0.05 + 0.01 * std::sin(2 * M_PI * t / 3.1);
     double roll = 0.005 * std::sin(2 * M_PI * t / 2.3);
@@ -80,6 +83,7 @@ class LoopPath : public CameraPath {
  private:
   double period_;
   bool jerk_;
+  double scale_;
 };
 
 // Pure rotation in place (no translation): a full turn of yaw per period, with pitch and roll
@@ -358,7 +362,7 @@ void AddTextures(Scene* scene, uint64_t seed, TextureStyle style, int side) {
   }
 }
 
-void BuildCity(Scene* scene, uint64_t seed, bool weak) {
+void BuildCity(Scene* scene, uint64_t seed, bool weak, double scale = 1.0) {
   SceneBuilder builder(scene, 60.0, weak);
   if (weak) {
     // Overcast: a sky close to the walls' brightness, flat light.
@@ -367,9 +371,9 @@ void BuildCity(Scene* scene, uint64_t seed, bool weak) {
   }
   SimRng rng(MixSeed(seed, 1));
   std::vector<Eigen::Vector2d> loop;
-  for (int i = 0; i <= 2000; ++i) loop.push_back(LoopPoint(2 * M_PI * i / 2000));
+  for (int i = 0; i <= 2000; ++i) loop.push_back(LoopPoint(2 * M_PI * i / 2000, scale));
   LineStreet(rng, builder, loop, loop, 0.0);
-  AddSkyline(rng, builder, Eigen::Vector2d::Zero(), 95, 140, 36);
+  AddSkyline(rng, builder, Eigen::Vector2d::Zero(), 95 * scale, 140 * scale, 36);
   // The ground is seen close up: a finer texture than the walls.
   SceneBuilder(scene, 80.0, weak).AddGround(-160, 160, -150, 150, 10.0, [&](int ix, int iy) {
     return SimRng(MixSeed(seed, 2 + ix * 1000 + iy));
@@ -446,6 +450,10 @@ const std::vector<PresetInfo>& Presets() {
        "the rover loop at ~6 m/s with jerky heading, pitch, roll, height and sideways motion",
        40.0},
       {"low_texture", "the rover loop in a city of weak, sparse texture", 100.0},
+      {"small_loop",
+       "the rover loop's street circuit at half size (~125 m, 2.5 m/s) in its own city: a "
+       "short closed loop for loop-closure tests",
+       50.0},
       {"false_loop",
        "straight 200 m street whose stretches at x=40-85 m and x=140-185 m look identical "
        "(not a loop)",
@@ -477,6 +485,9 @@ World BuildWorld(const std::string& preset, uint64_t seed, int texture_size) {
   } else if (preset == "fast") {
     BuildCity(&world.scene, seed, false);
     world.path = std::make_unique<LoopPath>(info->duration_s, true);
+  } else if (preset == "small_loop") {
+    BuildCity(&world.scene, seed, false, kSmallLoopScale);
+    world.path = std::make_unique<LoopPath>(info->duration_s, false, kSmallLoopScale);
   } else if (preset == "flight") {
     BuildTerrain(&world.scene, seed);
     world.path = std::make_unique<FlightPath>(info->duration_s);

@@ -1,0 +1,26 @@
+#include "frontend/keyframe_database.h"
+
+#include <glog/logging.h>
+
+#include <algorithm>
+
+namespace dala {
+
+void KeyframeDatabase::Add(KeyframeEntry entry) {
+  CHECK(entries_.empty() || entries_.back().frame < entry.frame)
+      << "KeyframeDatabase::Add: frame ids must increase (" << entry.frame << " after "
+      << entries_.back().frame << ")";
+  const size_t n = entry.landmark.size();
+  CHECK_EQ(entry.points.points.size(), n) << "one point per landmark id";
+  CHECK_EQ(entry.stereo.size(), n) << "one stereo point per landmark id";
+  CHECK_EQ(static_cast<size_t>(entry.points.descriptors.rows), n) << "one descriptor per point";
+  entries_.push_back(std::move(entry));
+}
+
+const KeyframeEntry* KeyframeDatabase::Find(FrameId frame) const {
+  const auto it = std::lower_bound(entries_.begin(), entries_.end(), frame,
+                                   [](const KeyframeEntry& e, FrameId f) { return e.frame < f; });
+  return it != entries_.end() && it->frame == frame ? &*it : nullptr;
+}
+
+}  // namespace dala

@@ -1,0 +1,67 @@
+#ifndef DALA_FRONTEND_KEYFRAME_DATABASE_H_
+#define DALA_FRONTEND_KEYFRAME_DATABASE_H_
+
+// KeyframeDatabase: what the frontend remembers of every keyframe so that a place can be
+// recognised when the camera comes back (frontend/place_recognition.h).
+//
+// An entry is a plain struct (the coordinator serialises the database with the map): the
+// keyframe's identity, its dead-reckoned pose (the frontend's visual odometry, used by the
+// place-recognition spatial gate), its global appearance descriptor, and its points that have a
+// stereo depth (the only ones a PnP can use): position, landmark id, normalised patch, and the
+// stereo point in the keyframe's left camera with its covariance.
+//
+// Memory: ~0.3 MB per keyframe with 500 stereo points (11x11 float patches); the image pyramid
+// is NOT kept (the matcher only resamples patches in its second image, the current frame).
+//
+// Not thread-safe.
+
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/geometry.h"
+#include "core/types.h"
+#include "frontend/harris.h"
+#include "frontend/stereo.h"
+
+namespace dala {
+
+struct KeyframeEntry {
+  FrameId frame;
+  int64_t t_ns = 0;
+  // Dead-reckoned pose of the left camera (frontend visual odometry) and the dead-reckoned path
+  // length from the first frame to this keyframe (metres).
+  Pose T_w_c = Pose::Identity();
+  double path_length_m = 0.0;
+  // Global appearance descriptor (see place_recognition.h): CV_32F, z-normalised thumbnail.
+  cv::Mat global_descriptor;
+  // The stereo points: `points.points[k]` and `points.descriptors.row(k)` (no pyramid) go with
+  // landmark[k] and stereo[k].
+  DetectedImage points;
+  std::vector<LandmarkId> landmark;
+  std::vector<StereoPoint> stereo;
+
+  size_t size() const { return landmark.size(); }
+};
+
+class KeyframeDatabase {
+ public:
+  // Appends an entry (keyframes in time order: CHECKs that frame ids increase and that the
+  // per-point vectors have one element per point).
+  void Add(KeyframeEntry entry);
+
+  const std::vector<KeyframeEntry>& entries() const { return entries_; }
+  size_t size() const { return entries_.size(); }
+  bool empty() const { return entries_.empty(); }
+  // nullptr when `frame` is not a keyframe of the database.
+  const KeyframeEntry* Find(FrameId frame) const;
+  void Clear() { entries_.clear(); }
+
+ private:
+  std::vector<KeyframeEntry> entries_;
+};
+
+}  // namespace dala
+
+#endif  // DALA_FRONTEND_KEYFRAME_DATABASE_H_

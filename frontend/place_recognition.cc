@@ -1,0 +1,238 @@
+#include "frontend/place_recognition.h"
+
+#include <glog/logging.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <unordered_set>
+
+namespace dala {
+
+MotionEstimatorOptions PlaceRecognitionOptions::DefaultPnpOptions() {
+  MotionEstimatorOptions o;
+  // No prior pose: more samples than tracking, and a wider gate for the older points.
+  o.ransac_max_iterations = 500;
+  o.ransac_threshold_px = 3.0;
+  o.min_inliers = 12;
+  o.seed = 7;
+  return o;
+}
+
+bool PlaceRecognitionOptions::IsValid(std::string* why) const {
+  const auto fail = [&](const char* msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (thumbnail_width < 4 || thumbnail_height < 4)
+    return fail("loop.thumbnail_width and loop.thumbnail_height must be >= 4");
+  if (max_shift_x < 0 || max_shift_y < 0 || 2 * max_shift_x >= thumbnail_width ||
+      2 * max_shift_y >= thumbnail_height)
+    return fail("loop.max_shift_x/y must be >= 0 and less than half the thumbnail size");
+  if (!(min_appearance_score >= -1.0 && min_appearance_score < 1.0))
+    return fail("loop.min_appearance_score must be in [-1, 1)");
+  if (top_k < 1) return fail("loop.top_k must be >= 1");
+  if (min_frame_gap < 1) return fail("loop.min_frame_gap must be >= 1");
+  if (!(gate_radius_m > 0.0) || !(gate_fraction >= 0.0))
+    return fail("loop.gate_radius_m must be > 0 and loop.gate_fraction >= 0");
+  if (!matcher.IsValid(why) || !pnp.IsValid(why)) return false;
+  if (min_inliers < pnp.min_inliers) return fail("loop.min_inliers must be >= pnp.min_inliers");
+  if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0))
+    return fail("loop.min_inlier_ratio must be in [0, 1]");
+  if (keyframes_between_loops < 0) return fail("loop.keyframes_between_loops must be >= 0");
+  return true;
+}
+
+PlaceRecognition::PlaceRecognition(const StereoRig& rig, const PlaceRecognitionOptions& options)
+    : rig_(rig), options_(options), pnp_(rig, options.pnp) {
+  std::string why;
+  CHECK(options_.IsValid(&why)) << why;
+}
+
+cv::Mat PlaceRecognition::GlobalDescriptor(const cv::Mat& gray,
+                                           const PlaceRecognitionOptions& options) {
+  CHECK_EQ(gray.type(), CV_8UC1) << "GlobalDescriptor expects an 8-bit grey image";
+  cv::Mat small, out;
+  cv::resize(gray, small, cv::Size(options.thumbnail_width, options.thumbnail_height), 0, 0,
+             cv::INTER_AREA);
+  small.convertTo(out, CV_32F);
+  const cv::Scalar mean = cv::mean(out);
+  out -= mean[0];
+  const double norm = cv::norm(out);
+  if (norm > 1e-6) out /= norm;
+  return out;
+}
+
+double PlaceRecognition::AppearanceScore(const cv::Mat& a, const cv::Mat& b,
+                                         const PlaceRecognitionOptions& options) {
+  CHECK(a.size() == b.size() && a.type() == CV_32F && b.type() == CV_32F)
+      << "AppearanceScore: descriptors of different sizes or types";
+  // ZNCC over the overlap of a and b shifted by (dx, dy): means and norms of the overlap.
+  double best = -1.0;
+  for (int dy = -options.max_shift_y; dy <= options.max_shift_y; ++dy) {
+    for (int dx = -options.max_shift_x; dx <= options.max_shift_x; ++dx) {
+      const int x0 = std::max(0, -dx), x1 = std::min(a.cols, a.cols - dx);
+      const int y0 = std::max(0, -dy), y1 = std::min(a.rows, a.rows - dy);
+      double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+      for (int y = y0; y < y1; ++y) {
+        const float* pa = a.ptr<float>(y);
+        const float* pb = b.ptr<float>(y + dy);
+        for (int x = x0; x < x1; ++x) {
+          const double va = pa[x], vb = pb[x + dx];
+          sa += va;
+          sb += vb;
+          saa += va * va;
+          sbb += vb * vb;
+          sab += va * vb;
+        }
+      }
+      const double n = static_cast<double>(x1 - x0) * (y1 - y0);
+      const double cov = sab - sa * sb / n;
+      const double var = (saa - sa * sa / n) * (sbb - sb * sb / n);
+      if (var <= 1e-18) continue;
+      best = std::max(best, cov / std::sqrt(var));
+    }
+  }
+  return best;
+}
+
+KeyframeEntry PlaceRecognition::MakeEntry(FrameId frame, int64_t t_ns, const Pose& T_w_c,
+                                          double path_length_m, const cv::Mat& left,
+                                          const DetectedImage& detection,
+                                          const std::vector<std::optional<StereoPoint>>& stereo,
+                                          const std::vector<LandmarkId>& landmark) const {
+  CHECK_EQ(stereo.size(), detection.points.size());
+  CHECK_EQ(landmark.size(), detection.points.size());
+  KeyframeEntry e;
+  e.frame = frame;
+  e.t_ns = t_ns;
+  e.T_w_c = T_w_c;
+  e.path_length_m = path_length_m;
+  e.global_descriptor = GlobalDescriptor(left, options_);
+  e.points.image_size = detection.image_size;
+  e.points.patch_size = detection.patch_size;
+  e.points.patch_spacing = detection.patch_spacing;
+  std::vector<int> rows;
+  for (size_t i = 0; i < stereo.size(); ++i) {
+    if (stereo[i] && landmark[i].valid()) rows.push_back(static_cast<int>(i));
+  }
+  e.points.descriptors.create(static_cast<int>(rows.size()), detection.descriptors.cols, CV_32F);
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const int i = rows[k];
+    e.points.points.push_back(detection.points[i]);
+    detection.descriptors.row(i).copyTo(e.points.descriptors.row(static_cast<int>(k)));
+    e.landmark.push_back(landmark[i]);
+    e.stereo.push_back(*stereo[i]);
+  }
+  return e;
+}
+
+bool PlaceRecognition::WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
+                                  const Eigen::Vector3d& t_w_cur) const {
+  if (!options_.spatial_gate) return true;
+  const double radius = options_.gate_radius_m +
+                        options_.gate_fraction * std::abs(query.path_length_m - old.path_length_m);
+  return (t_w_cur - query.T_w_c.translation()).norm() <= radius;
+}
+
+std::optional<PlaceMatch> PlaceRecognition::Verify(
+    const KeyframeEntry& old, const KeyframeEntry& query, const DetectedImage& detection,
+    const std::vector<std::optional<StereoPoint>>& stereo, const std::vector<LandmarkId>& landmark,
+    bool* rejected_by_gate) const {
+  if (rejected_by_gate) *rejected_by_gate = false;
+  if (static_cast<int>(old.size()) < options_.min_inliers) return std::nullopt;
+  const std::vector<Match> matches = MatchPoints(old.points, detection, options_.matcher);
+  if (static_cast<int>(matches.size()) < options_.min_inliers) return std::nullopt;
+  std::vector<MotionCorrespondence> corrs;
+  corrs.reserve(matches.size());
+  for (const Match& m : matches) {
+    MotionCorrespondence c;
+    c.p_prev = old.stereo[m.i].p_c0;
+    c.cov_p_prev = old.stereo[m.i].cov_p_c0;
+    c.uv_cur = detection.points[m.j].uv;
+    if (stereo[m.j]) c.u_right_cur = stereo[m.j]->u_right;
+    corrs.push_back(c);
+  }
+  const std::optional<MotionResult> pnp = pnp_.Estimate3D2D(corrs);
+  if (!pnp) return std::nullopt;
+  const int inliers = pnp->estimate.inliers;
+  if (inliers < options_.min_inliers ||
+      inliers < options_.min_inlier_ratio * static_cast<double>(matches.size())) {
+    return std::nullopt;
+  }
+  const Pose T_w_cur_loop = old.T_w_c * pnp->estimate.T_prev_cur;
+  if (!WithinGate(old, query, T_w_cur_loop.translation())) {
+    if (rejected_by_gate) *rejected_by_gate = true;
+    return std::nullopt;
+  }
+  PlaceMatch out;
+  out.loop.old_frame = old.frame;
+  out.loop.T_old_cur = pnp->estimate.T_prev_cur;
+  out.loop.cov = pnp->estimate.cov;
+  out.loop.inliers = inliers;
+  out.loop.correspondences = static_cast<int>(matches.size());
+  // Relabel: an inlier's current point takes the old landmark id, unless that id is already
+  // carried by another current point (a track that survived the gap) or it is the same id.
+  std::unordered_set<LandmarkId> present(landmark.begin(), landmark.end());
+  for (size_t c = 0; c < matches.size(); ++c) {
+    if (!pnp->inlier[c]) continue;
+    const LandmarkId old_id = old.landmark[matches[c].i];
+    const LandmarkId cur_id = landmark[matches[c].j];
+    if (old_id == cur_id || present.count(old_id)) continue;
+    present.insert(old_id);
+    out.loop.relabelled.emplace_back(cur_id, old_id);
+    out.current_point.push_back(matches[c].j);
+  }
+  return out;
+}
+
+std::optional<PlaceMatch> PlaceRecognition::Detect(
+    const KeyframeEntry& query, const DetectedImage& detection,
+    const std::vector<std::optional<StereoPoint>>& stereo,
+    const std::vector<LandmarkId>& landmark) {
+  const auto t0 = std::chrono::steady_clock::now();
+  stats_ = PlaceRecognitionStats();
+  std::optional<PlaceMatch> found;
+  ++keyframes_since_loop_;
+  if (options_.enable && keyframes_since_loop_ > options_.keyframes_between_loops) {
+    // Old enough, within the gate, scored; best first (ties: older first, deterministic).
+    std::vector<std::pair<double, size_t>> scored;
+    const auto& entries = database_.entries();
+    for (size_t k = 0; k < entries.size(); ++k) {
+      const KeyframeEntry& e = entries[k];
+      if (query.frame.value - e.frame.value < options_.min_frame_gap) break;  // Time order.
+      ++stats_.searched;
+      if (!WithinGate(e, query, e.T_w_c.translation())) {
+        ++stats_.gated_out;
+        continue;
+      }
+      const double score = AppearanceScore(e.global_descriptor, query.global_descriptor, options_);
+      if (score > stats_.best_score) {
+        stats_.best_score = score;
+        stats_.best_frame = e.frame;
+      }
+      if (score >= options_.min_appearance_score) scored.emplace_back(score, k);
+    }
+    std::stable_sort(scored.begin(), scored.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (static_cast<int>(scored.size()) > options_.top_k) scored.resize(options_.top_k);
+    for (const auto& [score, k] : scored) {
+      ++stats_.candidates;
+      bool gate = false;
+      found = Verify(entries[k], query, detection, stereo, landmark, &gate);
+      stats_.rejected_by_gate |= gate;
+      if (found) {
+        found->loop.appearance_score = score;
+        stats_.best_inliers = std::max(stats_.best_inliers, found->loop.inliers);
+        keyframes_since_loop_ = 0;
+        break;
+      }
+    }
+  }
+  stats_.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return found;
+}
+
+}  // namespace dala

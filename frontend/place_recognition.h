@@ -1,0 +1,161 @@
+#ifndef DALA_FRONTEND_PLACE_RECOGNITION_H_
+#define DALA_FRONTEND_PLACE_RECOGNITION_H_
+
+// Place recognition for loop closure: at each keyframe, is this a place seen long ago?
+//
+// 1. Candidates by appearance. The global descriptor is a small thumbnail of the left image
+//    (area-averaged to thumbnail_width x thumbnail_height, z-normalised); two keyframes score
+//    the best ZNCC of their thumbnails over small shifts (+-max_shift_x/y thumbnail pixels, i.e.
+//    a few degrees of yaw/pitch). 16x10 separated revisits from other places best among 64x40,
+//    40x24, 32x20, 20x12 and 16x10 on the small loop (finer thumbnails decorrelate within 0.5 m
+//    of forward motion: the near walls and ground dominate them). Why a thumbnail rather than a vocabulary over our point
+//    descriptors: it needs no training data (a bag of words over 11x11 patches would need a
+//    vocabulary learnt on representative images, and our patches are rotation-normalised, so
+//    they carry little of what distinguishes one place from another), it costs ~1 us per
+//    comparison, and a rover revisiting a place follows nearly the same viewpoint, which is
+//    the case a thumbnail handles well. The robust matcher (which is viewpoint tolerant) and the
+//    PnP do the real verification; the thumbnail only ranks.
+//    Excluded: keyframes less than min_frame_gap frames old, and (spatial gate, the known
+//    implementation of the paper's loop closing looked within 3 m of the estimate) keyframes
+//    whose dead-reckoned position is farther from the current one than
+//      gate_radius_m + gate_fraction * (dead-reckoned path length between the two keyframes),
+//    i.e. farther than the visual odometry can have drifted. Without this gate a place that
+//    looks identical but is elsewhere (the `false_loop` preset) cannot be told apart by images.
+// 2. Verification of the top_k candidates (best first, score >= min_appearance_score): the
+//    robust matcher without prior (any rotation, scale), old keyframe's stereo points -> current
+//    points, then a seeded RANSAC PnP (frontend/motion_estimator.h) on the old keyframe's stereo
+//    points in its camera against the current (u, v[, d]). Accepted with >= min_inliers inliers,
+//    inliers / matches >= min_inlier_ratio, and the PnP's implied current pose
+//    T_w_old * T_old_cur within the spatial gate of the dead-reckoned one.
+//
+// Deterministic (seeded RANSAC, ordered scans, ties broken by frame id).
+//
+// Usage (the Frontend does this at each keyframe):
+//   PlaceRecognition pr(rig, options);
+//   KeyframeEntry query = pr.MakeEntry(frame_id, t_ns, T_w_c, path_length, left, det, stereo, ids);
+//   std::optional<PlaceMatch> match = pr.Detect(query, det, stereo, ids);
+//   pr.Add(std::move(query));   // after relabelling its ids with match->old_landmark
+//
+// Not thread-safe.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/camera.h"
+#include "core/frame_measurement.h"
+#include "core/types.h"
+#include "frontend/keyframe_database.h"
+#include "frontend/matcher.h"
+#include "frontend/motion_estimator.h"
+#include "frontend/stereo.h"
+
+namespace dala {
+
+struct PlaceRecognitionOptions {
+  bool enable = true;  // Loop detection at keyframes (stereo only).
+  // Global descriptor: thumbnail size (pixels) and the shifts searched when comparing.
+  int thumbnail_width = 16;
+  int thumbnail_height = 10;
+  int max_shift_x = 1;
+  int max_shift_y = 1;
+  // Candidates: appearance score (ZNCC in [-1, 1]) at least this, the best top_k verified.
+  // Low: in the rendered city two views 0.5 m apart score ~0.7 and 1 m apart ~0.3 (near walls
+  // and ground change fast), other places up to ~0.3; verification decides.
+  double min_appearance_score = 0.2;
+  int top_k = 3;
+  // Keyframes less than this many frames older than the current one are not candidates.
+  int min_frame_gap = 100;
+  // Spatial gate on the dead-reckoned positions (see the file comment); false: appearance only.
+  bool spatial_gate = true;
+  double gate_radius_m = 5.0;
+  double gate_fraction = 0.05;
+  // Verification: matcher (no prior) and PnP (RANSAC + refinement, seeded).
+  MatcherOptions matcher;
+  MotionEstimatorOptions pnp = DefaultPnpOptions();
+  int min_inliers = 30;
+  double min_inlier_ratio = 0.3;
+  // After an accepted loop, this many keyframes are not searched (one loop edge per revisit
+  // is enough for the pose graph; more cost time and add nothing but redundancy).
+  int keyframes_between_loops = 5;
+
+  static MotionEstimatorOptions DefaultPnpOptions();
+  bool IsValid(std::string* why) const;
+};
+
+// A verified loop: the message for the estimators, and which current points were matched to
+// which old landmark (the frontend relabels them).
+struct PlaceMatch {
+  LoopDetection loop;
+  // Parallel to loop.relabelled: the index of the current point (in the current detection).
+  std::vector<int> current_point;
+};
+
+// What the last Detect() did (logs, reports, tests).
+struct PlaceRecognitionStats {
+  int searched = 0;             // Entries old enough.
+  int gated_out = 0;            // ...rejected by the spatial gate before matching.
+  int candidates = 0;           // Verified (top_k above the score).
+  double best_score = -1.0;     // Best appearance score among the old-enough entries.
+  FrameId best_frame;           // Its keyframe.
+  int best_inliers = 0;         // Inliers of the accepted loop (0: none).
+  bool rejected_by_gate = false;  // A candidate passed PnP but its pose failed the gate.
+  double ms = 0.0;              // Wall time of Detect().
+};
+
+class PlaceRecognition {
+ public:
+  PlaceRecognition(const StereoRig& rig, const PlaceRecognitionOptions& options);
+
+  // The global descriptor of an 8-bit grey image (CV_32F thumbnail, zero mean, unit norm).
+  static cv::Mat GlobalDescriptor(const cv::Mat& gray, const PlaceRecognitionOptions& options);
+  // Best ZNCC of two descriptors over the allowed shifts, in [-1, 1].
+  static double AppearanceScore(const cv::Mat& a, const cv::Mat& b,
+                                const PlaceRecognitionOptions& options);
+
+  // The database entry of a keyframe: its stereo points only (with their landmark ids).
+  KeyframeEntry MakeEntry(FrameId frame, int64_t t_ns, const Pose& T_w_c, double path_length_m,
+                          const cv::Mat& left, const DetectedImage& detection,
+                          const std::vector<std::optional<StereoPoint>>& stereo,
+                          const std::vector<LandmarkId>& landmark) const;
+
+  // Searches the database for the place of `query` (an entry made by MakeEntry, not yet added)
+  // whose full detection, stereo and landmark ids are given. nullopt: no verified loop.
+  std::optional<PlaceMatch> Detect(const KeyframeEntry& query, const DetectedImage& detection,
+                                   const std::vector<std::optional<StereoPoint>>& stereo,
+                                   const std::vector<LandmarkId>& landmark);
+
+  // Verifies one old entry against the current keyframe (matcher + PnP + gate), regardless of
+  // appearance. Exposed for tests and tools.
+  std::optional<PlaceMatch> Verify(const KeyframeEntry& old, const KeyframeEntry& query,
+                                   const DetectedImage& detection,
+                                   const std::vector<std::optional<StereoPoint>>& stereo,
+                                   const std::vector<LandmarkId>& landmark,
+                                   bool* rejected_by_gate = nullptr) const;
+
+  void Add(KeyframeEntry entry) { database_.Add(std::move(entry)); }
+  const KeyframeDatabase& database() const { return database_; }
+  KeyframeDatabase* mutable_database() { return &database_; }
+  const PlaceRecognitionStats& last_stats() const { return stats_; }
+  const PlaceRecognitionOptions& options() const { return options_; }
+
+ private:
+  // |t_w - query.T_w_c.translation()| within the gate radius of (old, query).
+  bool WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
+                  const Eigen::Vector3d& t_w) const;
+
+  StereoRig rig_;
+  PlaceRecognitionOptions options_;
+  MotionEstimator pnp_;
+  KeyframeDatabase database_;
+  PlaceRecognitionStats stats_;
+  int keyframes_since_loop_ = 1 << 30;
+};
+
+}  // namespace dala
+
+#endif  // DALA_FRONTEND_PLACE_RECOGNITION_H_
