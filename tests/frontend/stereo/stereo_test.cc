@@ -94,8 +94,7 @@ TEST(Stereo, DisparityHasNoSignedBias) {
     const HarrisOptions harris = SequenceHarrisOptions();
     const DetectedImage left = DetectHarris(frame.left, harris);
     const DetectedImage right = DetectHarris(frame.right, harris);
-    const auto stereo =
-        MatchStereo(rig, left, right, frame.left, frame.right, stereo_options);
+    const auto stereo = MatchStereo(rig, left, right, frame.left, frame.right, stereo_options);
     for (size_t k = 0; k < stereo.size(); ++k) {
       if (!stereo[k]) continue;
       const Eigen::Vector2d& uv = left.points[k].uv;
