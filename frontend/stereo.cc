@@ -2,6 +2,7 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <opencv2/imgproc.hpp>
@@ -54,6 +55,7 @@ bool StereoOptions::IsValid(std::string* why) const {
   if (max_dv_px <= 0) return fail("stereo.max_dv_px must be > 0");
   if (min_depth_m <= 0 || max_depth_m <= min_depth_m)
     return fail("stereo: need 0 < min_depth_m < max_depth_m");
+  if (!(max_depth_baselines > 0)) return fail("stereo.max_depth_baselines must be > 0");
   if (refine_window < 3 || refine_window % 2 == 0)
     return fail("stereo.refine_window must be odd and >= 3");
   if (sigma_px <= 0 || sigma_disparity <= 0) return fail("stereo sigmas must be > 0");
@@ -70,6 +72,9 @@ std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig,
   const double fb = rig.left.fx * rig.baseline;
   const double min_disparity = fb / options.max_depth_m;
   const double max_disparity = fb / options.min_depth_m;
+  // Depth is kept from this disparity up (see the depth limit in stereo.h).
+  const double min_disparity_kept =
+      fb / std::min(options.max_depth_m, options.max_depth_baselines * rig.baseline);
   const MatchPrior prior =
       MatchPrior::RectifiedStereo(options.max_dv_px, min_disparity, max_disparity);
   MatcherOptions matcher = options.matcher;
@@ -88,7 +93,7 @@ std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig,
                                   options.refine_window)
             : right.points[m.j].uv.x();
     const Eigen::Vector3d uvd(uv.x(), uv.y(), uv.x() - u_right);
-    if (uvd.z() < min_disparity || uvd.z() > max_disparity) continue;
+    if (uvd.z() < min_disparity_kept || uvd.z() > max_disparity) continue;
     StereoPoint sp;
     sp.u_right = u_right;
     if (!rig.Triangulate(uvd, &sp.p_c0)) continue;
