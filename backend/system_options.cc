@@ -129,6 +129,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ekf_stereo", "gate_chi2", &es.gate_chi2);
   v->Field("ekf_stereo", "loop_min_gap_frames", &es.loop_min_gap_frames);
   v->Field("ekf_stereo", "loop_gate_chi2", &es.loop_gate_chi2);
+  v->Field("ekf_stereo", "motion_covariance_scale", &es.motion_covariance_scale);
   MonoEkfOptions& em = o->ekf_mono;
   v->Field("ekf_mono", "max_landmarks", &em.max_landmarks);
   v->Field("ekf_mono", "d_min", &em.d_min);

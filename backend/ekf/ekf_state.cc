@@ -3,6 +3,7 @@
 #include <glog/logging.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 namespace dala {
 
@@ -18,7 +19,9 @@ void EkfState::Reset(const Pose& T_w_c, const Matrix6d& cov_pose) {
   p_w_.clear();
   index_.clear();
   P_.setZero();
-  P_.topLeftCorner<6, 6>() = cov_pose;
+  // delta = Adj(T^-1) xi, so Cov(xi) = Adj(T) Cov(delta) Adj(T)^T.
+  const Matrix6d A = AdjointSE3(T_w_c);
+  P_.topLeftCorner<6, 6>() = A * cov_pose * A.transpose();
 }
 
 int EkfState::IndexOf(LandmarkId id) const {
@@ -26,37 +29,89 @@ int EkfState::IndexOf(LandmarkId id) const {
   return it == index_.end() ? -1 : it->second;
 }
 
-void EkfState::Predict(const Pose& T_prev_cur, const Matrix6d& Q) {
-  const int n = dim();
-  const Matrix6d F = AdjointSE3(T_prev_cur.inverse());
-  T_w_c_ = Orthonormalized(T_w_c_ * T_prev_cur);
-  const Matrix6d P_pp = F * P_.topLeftCorner<6, 6>() * F.transpose() + Q;
-  P_.topLeftCorner<6, 6>() = 0.5 * (P_pp + P_pp.transpose());
-  if (n > 6) {
-    const Eigen::MatrixXd P_pl = F * P_.block(0, 6, 6, n - 6);
-    P_.block(0, 6, 6, n - 6) = P_pl;
-    P_.block(6, 0, n - 6, 6) = P_pl.transpose();
-  }
+Matrix6d EkfState::pose_covariance() const {
+  const Matrix6d A = AdjointSE3(T_w_c_.inverse());
+  return A * P_.topLeftCorner<6, 6>() * A.transpose();
 }
 
-void EkfState::InflatePose(const Matrix6d& Q) { P_.topLeftCorner<6, 6>() += Q; }
+Eigen::Matrix3d EkfState::landmark_covariance(int i) const {
+  // p_w - p_hat = -[p_hat]x phi + e_i.
+  const int o = 6 + 3 * i;
+  const Eigen::Matrix3d M = -Skew(p_w_[i]);
+  const Eigen::Matrix3d cross = M * P_.block<3, 3>(0, o);
+  return M * P_.topLeftCorner<3, 3>() * M.transpose() + cross + cross.transpose() +
+         P_.block<3, 3>(o, o);
+}
+
+Eigen::MatrixXd EkfState::covariance() const {
+  // C = J P J^T with J the map from e to the classic error: pose rows Adj(T^-1) (on xi),
+  // landmark rows [-[p_hat_i]x (on phi), I (on e_i)].
+  const int n = dim();
+  const Matrix6d A = AdjointSE3(T_w_c_.inverse());
+  auto apply_j = [&](const Eigen::MatrixXd& X) {
+    Eigen::MatrixXd Y(n, X.cols());
+    Y.topRows(6) = A * X.topRows(6);
+    for (int i = 0; i < num_landmarks(); ++i) {
+      Y.middleRows(6 + 3 * i, 3) = X.middleRows(6 + 3 * i, 3) - Skew(p_w_[i]) * X.topRows(3);
+    }
+    return Y;
+  };
+  const Eigen::MatrixXd JP = apply_j(P_.topLeftCorner(n, n));
+  Eigen::MatrixXd C = apply_j(JP.transpose());
+  return 0.5 * (C + C.transpose());
+}
+
+void EkfState::AddPoseNoise(const Matrix6d& Q_delta) {
+  // G Q G^T as a rank update with B = G U sqrt(D), Q = U D U^T (Q is PSD: clamp round-off).
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(0.5 * (Q_delta + Q_delta.transpose()));
+  const Matrix6d sqrt_Q =
+      eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  const int n = dim();
+  const Eigen::Matrix3d R = T_w_c_.linear();
+  Eigen::MatrixXd B(n, 6);
+  B.topRows(6) = AdjointSE3(T_w_c_) * sqrt_Q;
+  const Eigen::Matrix<double, 3, 6> sqrt_Q_phi = sqrt_Q.topRows(3);
+  for (int i = 0; i < num_landmarks(); ++i) {
+    B.middleRows(6 + 3 * i, 3) = Skew(p_w_[i]) * R * sqrt_Q_phi;
+  }
+  auto P = P_.topLeftCorner(n, n);
+  P.selfadjointView<Eigen::Lower>().rankUpdate(B, 1.0);
+  P.triangularView<Eigen::StrictlyUpper>() = P.transpose().eval();
+}
+
+void EkfState::Predict(const Pose& T_prev_cur, const Matrix6d& Q) {
+  // F = I in the invariant error; the noise enters through G at the predicted estimate.
+  T_w_c_ = Orthonormalized(T_w_c_ * T_prev_cur);
+  AddPoseNoise(Q);
+}
+
+void EkfState::InflatePose(const Matrix6d& Q) { AddPoseNoise(Q); }
 
 int EkfState::AddLandmarkFromCamera(LandmarkId id, const Eigen::Vector3d& p_c,
                                     const Eigen::Matrix3d& cov_p_c) {
   const Eigen::Matrix3d R = T_w_c_.linear();
-  Eigen::Matrix<double, 3, 6> J_pose;
-  J_pose << -R * Skew(p_c), R;
-  return AddLandmark(id, T_w_c_ * p_c, R * cov_p_c * R.transpose(), J_pose);
+  Eigen::Matrix<double, 3, 6> J_xi;  // e_new = rho + R dp_c.
+  J_xi << Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Identity();
+  return AddInvariantLandmark(id, T_w_c_ * p_c, R * cov_p_c * R.transpose(), J_xi);
 }
 
 int EkfState::AddLandmark(LandmarkId id, const Eigen::Vector3d& p_w, const Eigen::Matrix3d& cov_p_w,
                           const Eigen::Matrix<double, 3, 6>& J_pose) {
+  // e_new = (p_w - p_hat) + [p_hat]x phi = J_pose Adj(T^-1) xi + [p_hat]x phi + noise.
+  Eigen::Matrix<double, 3, 6> J_xi = J_pose * AdjointSE3(T_w_c_.inverse());
+  J_xi.leftCols<3>() += Skew(p_w);
+  return AddInvariantLandmark(id, p_w, cov_p_w, J_xi);
+}
+
+int EkfState::AddInvariantLandmark(LandmarkId id, const Eigen::Vector3d& p_w,
+                                   const Eigen::Matrix3d& cov_p_w,
+                                   const Eigen::Matrix<double, 3, 6>& J_xi) {
   CHECK(!full()) << "EkfState: the state is full (" << max_landmarks_ << " landmarks)";
   CHECK_EQ(IndexOf(id), -1) << "EkfState: landmark " << id << " is already in the state";
   const int n = dim();
-  // Cross-covariance with everything: J_pose * P(pose rows, all columns).
-  const Eigen::MatrixXd P_lx = J_pose * P_.topLeftCorner(6, n);
-  Eigen::Matrix3d P_ll = J_pose * P_.topLeftCorner<6, 6>() * J_pose.transpose() + cov_p_w;
+  // Cross-covariance with everything: J_xi * P(pose rows, all columns).
+  const Eigen::MatrixXd P_lx = J_xi * P_.topLeftCorner(6, n);
+  Eigen::Matrix3d P_ll = J_xi * P_.topLeftCorner<6, 6>() * J_xi.transpose() + cov_p_w;
   P_ll = 0.5 * (P_ll + P_ll.transpose()).eval();
   P_.block(n, 0, 3, n) = P_lx;
   P_.block(0, n, n, 3) = P_lx.transpose();
@@ -98,12 +153,19 @@ void EkfState::RemoveLandmarks(const std::vector<bool>& remove) {
   for (int i = 0; i < num_landmarks(); ++i) index_[ids_[i]] = i;
 }
 
+Eigen::MatrixXd EkfState::InvariantHPose(const EkfUpdateBlock& b) const {
+  Eigen::MatrixXd H = b.H_pose * AdjointSE3(T_w_c_.inverse());
+  if (b.landmark >= 0) H.leftCols(3) -= b.H_landmark * Skew(p_w_[b.landmark]);
+  return H;
+}
+
 Eigen::MatrixXd EkfState::InnovationCovariance(const EkfUpdateBlock& b) const {
   const int l = b.landmark;
-  Eigen::MatrixXd S = b.H_pose * P_.topLeftCorner<6, 6>() * b.H_pose.transpose() + b.R;
+  const Eigen::MatrixXd H_xi = InvariantHPose(b);
+  Eigen::MatrixXd S = H_xi * P_.topLeftCorner<6, 6>() * H_xi.transpose() + b.R;
   if (l >= 0) {
     const int o = 6 + 3 * l;
-    const Eigen::MatrixXd cross = b.H_pose * P_.block(0, o, 6, 3) * b.H_landmark.transpose();
+    const Eigen::MatrixXd cross = H_xi * P_.block(0, o, 6, 3) * b.H_landmark.transpose();
     S += cross + cross.transpose() + b.H_landmark * P_.block<3, 3>(o, o) * b.H_landmark.transpose();
   }
   return S;
@@ -118,14 +180,17 @@ bool EkfState::Update(const std::vector<EkfUpdateBlock>& blocks) {
     CHECK(b.landmark < num_landmarks());
     m += static_cast<int>(b.residual.size());
   }
-  // W = P H^T (n x m), built from the few non-zero columns of H.
+  // W = P H^T (n x m), built from the few non-zero columns of H (invariant coordinates).
   Eigen::MatrixXd W(n, m);
   Eigen::VectorXd r(m);
   Eigen::MatrixXd R = Eigen::MatrixXd::Zero(m, m);
+  std::vector<Eigen::MatrixXd> H_xi;
+  H_xi.reserve(blocks.size());
   int row = 0;
   for (const EkfUpdateBlock& b : blocks) {
     const int k = static_cast<int>(b.residual.size());
-    W.middleCols(row, k) = P_.topLeftCorner(n, 6) * b.H_pose.transpose();
+    H_xi.push_back(InvariantHPose(b));
+    W.middleCols(row, k) = P_.topLeftCorner(n, 6) * H_xi.back().transpose();
     if (b.landmark >= 0) {
       W.middleCols(row, k) += P_.block(0, 6 + 3 * b.landmark, n, 3) * b.H_landmark.transpose();
     }
@@ -136,9 +201,10 @@ bool EkfState::Update(const std::vector<EkfUpdateBlock>& blocks) {
   // S = H W + R.
   Eigen::MatrixXd S = R;
   row = 0;
-  for (const EkfUpdateBlock& b : blocks) {
+  for (size_t j = 0; j < blocks.size(); ++j) {
+    const EkfUpdateBlock& b = blocks[j];
     const int k = static_cast<int>(b.residual.size());
-    S.middleRows(row, k) += b.H_pose * W.topRows(6);
+    S.middleRows(row, k) += H_xi[j] * W.topRows(6);
     if (b.landmark >= 0) S.middleRows(row, k) += b.H_landmark * W.middleRows(6 + 3 * b.landmark, 3);
     row += k;
   }
@@ -151,8 +217,14 @@ bool EkfState::Update(const std::vector<EkfUpdateBlock>& blocks) {
   auto P = P_.topLeftCorner(n, n);
   P.selfadjointView<Eigen::Lower>().rankUpdate(V, -1.0);
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose().eval();
-  T_w_c_ = Orthonormalized(T_w_c_ * ExpSE3(dx.head<6>()));
-  for (int i = 0; i < num_landmarks(); ++i) p_w_[i] += dx.segment<3>(6 + 3 * i);
+  // Injection on SE_{1+N}(3): T <- Exp(xi) T, p_i <- Exp(phi) p_i + J_l(phi) e_i.
+  const Vector6d xi = dx.head<6>();
+  T_w_c_ = Orthonormalized(ExpSE3(xi) * T_w_c_);
+  const Eigen::Matrix3d R_phi = ExpSO3(xi.head<3>());
+  const Eigen::Matrix3d J_l = LeftJacobianSO3(xi.head<3>());
+  for (int i = 0; i < num_landmarks(); ++i) {
+    p_w_[i] = R_phi * p_w_[i] + J_l * dx.segment<3>(6 + 3 * i);
+  }
   return true;
 }
 

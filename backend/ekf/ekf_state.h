@@ -5,30 +5,47 @@
 // (as OpenVINS keeps its covariance behind StateHelper). Used by StereoEkfEstimator and
 // MonoEkfEstimator.
 //
-// State and error state (stated once here for both filters):
-//   x = (T_w_c, p_w_1 .. p_w_N)      camera pose in the world, Euclidean landmarks in the world.
-//   Pose error on the right:  T_w_c = T_hat * Exp(delta),  delta = [phi; rho]  (core/geometry.h).
-//   Landmark error additive:  p_w_i = p_hat_i + dp_i.
-//   Error vector e = [delta (6); dp_1 (3); ...; dp_N (3)],  P = Cov(e), (6 + 3N) x (6 + 3N).
+// State: x = (T_w_c, p_w_1 .. p_w_N), the camera pose in the world and Euclidean landmarks.
 //
-// Prediction with a relative motion M = T_prev_cur = M_hat * Exp(eta), eta ~ N(0, Q):
-//   T_cur = T_prev * M = T_hat_prev Exp(delta_prev) M_hat Exp(eta)
-//         = T_hat_prev M_hat Exp(Adj(M_hat^-1) delta_prev) Exp(eta)
-//        ~= T_hat_cur Exp(Adj(M_hat^-1) delta_prev + eta),
-//   so F = d delta_cur / d delta_prev = Adj(M_hat^-1), G = I, landmarks unchanged:
-//   P_pp <- F P_pp F^T + Q,  P_pl <- F P_pl.
+// Error state: the right-invariant error of the group SE_{1+N}(3) (Barrau & Bonnabel, "An
+// EKF-SLAM algorithm with consistency properties", 2015), in the world frame:
+//   T_w_c = Exp(xi) T_hat,   xi = [phi; rho]               (left perturbation, core/geometry.h),
+//   p_w_i = Exp(phi) p_hat_i + J_l(phi) e_i  ~= p_hat_i + phi x p_hat_i + e_i,
+//   e = [phi; rho; e_1; ...; e_N],  P = Cov(e), (6 + 3N) x (6 + 3N)   (stored internally).
+// Why: the 6 unobservable directions of SLAM (a global rotation dtheta and translation dt of the
+// whole scene) are, in these coordinates, N = [phi = dtheta, rho = 0, e_i = 0] and
+// [0, dt, dt, ..., dt], independent of the estimate. The observation Jacobians below are exactly
+// zero along N at ANY linearisation point, and the prediction keeps N, so the filter never gains
+// information along them. With the classic error (pose on the right, landmarks additive) the
+// unobservable subspace depends on (R_hat, t_hat, p_hat); linearising at successive, different
+// estimates gains spurious information on the global orientation: the classic EKF-SLAM
+// overconfidence (Huang et al.), measured in docs/ekf.md (pose NEES).
+//
+// The API speaks the classic coordinates everywhere (pose covariances for the right perturbation
+// T_hat Exp(delta), landmark errors additive, observation Jacobians d h / d delta and
+// d h / d p_w); this class converts at its boundary. With delta = Adj(T_hat^-1) xi and
+// p_w - p_hat = -[p_hat]x phi + e_i:
+//   H_xi = H_delta Adj(T_hat^-1) - H_p [p_hat]x [I 0],   H_e = H_p.
+// For an observation of p_c = R^T (p_w - t): H_xi = [0, -D R^T], H_e = D R^T (D = d h / d p_c),
+// whose phi part is zero at any estimate.
+//
+// Prediction with a relative motion M = T_prev_cur = M_hat Exp(eta), eta ~ N(0, Q):
+//   T_cur = Exp(xi) T_hat_prev M_hat Exp(eta) ~= Exp(xi + Adj(T_hat_cur) eta) T_hat_cur,
+//   and the landmark errors, defined relative to phi, take the rotation noise:
+//   e_i <- e_i + [p_hat_i]x R_hat_cur eta_phi.   So F = I and
+//   G = [Adj(T_hat_cur); [p_hat_1]x R_hat_cur, 0; ...] (the adjoint of SE_{1+N}(3), pose columns),
+//   P <- P + G Q G^T (O(N^2), a rank-6 update).
 //
 // Update: stacked observation blocks (each touches the pose and at most one landmark), batched:
 //   W = P H^T, S = H W + R = L L^T, K = W S^-1, e_hat = K r,
 //   P <- P - W S^-1 W^T = P - V V^T with V = W L^-T   (a symmetric rank update: P stays symmetric
 //   by construction and is re-symmetrised; this equals the Joseph form for the optimal gain).
-//   The correction is injected as T_hat <- T_hat Exp(e_hat_pose), p_hat_i <- p_hat_i + e_hat_i
-//   (the reset Jacobian Jr^-1(e_hat) ~= I is neglected, as usual for small corrections).
+//   Injection: T_hat <- Exp(xi_hat) T_hat, p_hat_i <- Exp(phi_hat) p_hat_i + J_l(phi_hat) e_hat_i
+//   (the covariance reset Jacobian ~= I is neglected, as usual for small corrections).
 //
 // Landmark augmentation from a point p_c measured in the current camera frame with covariance
-// C (independent of the state): p_w = T_w_c p_c = R (p_c + phi x p_c + rho) to first order, so
-//   J_pose = [-R [p_c]x, R],  J_pc = R,
-//   P_ll = J_pose P_pp J_pose^T + R C R^T,  P_lx = J_pose P_px  (full cross-covariance).
+// C (independent of the state): p_w = R p_c + t gives e_new = rho + R_hat dp_c, so
+//   P_ll = P_rho,rho + R C R^T,  P_l,x = P_rho,x   (full cross-covariance).
 
 #include <Eigen/Core>
 #include <unordered_map>
@@ -40,7 +57,8 @@
 namespace dala {
 
 // One observation block for EkfState::Update: residual r = z - h(x_hat) of dimension k,
-// r ~= H_pose delta + H_landmark dp_landmark + noise(R).
+// r ~= H_pose delta + H_landmark dp_landmark + noise(R), in the classic coordinates
+// (T_w_c = T_hat Exp(delta), p_w = p_hat + dp; EkfState converts).
 struct EkfUpdateBlock {
   Eigen::VectorXd residual;
   Eigen::MatrixXd R;
@@ -54,10 +72,12 @@ class EkfState {
   // max_landmarks bounds the state (storage is allocated once: (6+3N)^2 doubles).
   explicit EkfState(int max_landmarks);
 
+  // cov_pose: of the right perturbation delta (T_w_c = T_hat Exp(delta)).
   void Reset(const Pose& T_w_c, const Matrix6d& cov_pose);
 
   const Pose& T_w_c() const { return T_w_c_; }
-  Matrix6d pose_covariance() const { return P_.topLeftCorner<6, 6>(); }
+  // Covariance of delta in T_w_c = T_hat Exp(delta).
+  Matrix6d pose_covariance() const;
   int num_landmarks() const { return static_cast<int>(ids_.size()); }
   int max_landmarks() const { return max_landmarks_; }
   bool full() const { return num_landmarks() >= max_landmarks_; }
@@ -66,13 +86,19 @@ class EkfState {
   int IndexOf(LandmarkId id) const;
   LandmarkId id(int i) const { return ids_[i]; }
   const Eigen::Vector3d& p_w(int i) const { return p_w_[i]; }
-  Eigen::Matrix3d landmark_covariance(int i) const { return P_.block<3, 3>(6 + 3 * i, 6 + 3 * i); }
-  // The full covariance (dim x dim block of the storage).
-  Eigen::Block<const Eigen::MatrixXd> covariance() const { return P_.topLeftCorner(dim(), dim()); }
+  // Covariance of p_w_i - p_hat_i.
+  Eigen::Matrix3d landmark_covariance(int i) const;
+  // The full covariance in the classic coordinates [delta; p_w_1 - p_hat_1; ...] (a copy, O(N^2)).
+  Eigen::MatrixXd covariance() const;
+  // The stored covariance of the invariant error e (file comment).
+  Eigen::Block<const Eigen::MatrixXd> invariant_covariance() const {
+    return P_.topLeftCorner(dim(), dim());
+  }
 
-  // T_w_c <- T_w_c * T_prev_cur, covariance as in the file comment.
+  // T_w_c <- T_w_c * T_prev_cur; Q is the covariance of eta in T_prev_cur = M_hat Exp(eta).
   void Predict(const Pose& T_prev_cur, const Matrix6d& Q);
-  // Adds Q to the pose covariance (no motion known).
+  // Adds Q to the covariance of delta (T_w_c = T_hat Exp(delta)): the pose is kept, no motion
+  // known. Correlations are updated as for a prediction with the identity motion.
   void InflatePose(const Matrix6d& Q);
 
   // Appends a landmark from p_c (current camera frame, covariance cov_p_c). CHECKs not full and
@@ -80,7 +106,8 @@ class EkfState {
   int AddLandmarkFromCamera(LandmarkId id, const Eigen::Vector3d& p_c,
                             const Eigen::Matrix3d& cov_p_c);
   // Appends a landmark given in the world with cov_p_w, uncorrelated with the state except
-  // through J_pose (d p_w / d delta of the current pose; zero for none).
+  // through J_pose (d p_w / d delta of the current pose, classic right perturbation; zero for
+  // none).
   int AddLandmark(LandmarkId id, const Eigen::Vector3d& p_w, const Eigen::Matrix3d& cov_p_w,
                   const Eigen::Matrix<double, 3, 6>& J_pose);
 
@@ -95,6 +122,13 @@ class EkfState {
   Eigen::MatrixXd InnovationCovariance(const EkfUpdateBlock& block) const;
 
  private:
+  int AddInvariantLandmark(LandmarkId id, const Eigen::Vector3d& p_w,
+                           const Eigen::Matrix3d& cov_p_w, const Eigen::Matrix<double, 3, 6>& J_xi);
+  // H_pose of a classic block (d h / d delta, d h / d p_w) converted to d h / d xi.
+  Eigen::MatrixXd InvariantHPose(const EkfUpdateBlock& block) const;
+  // P <- P + G Q G^T with G of the prediction (file comment) at the current estimate.
+  void AddPoseNoise(const Matrix6d& Q_delta);
+
   int max_landmarks_;
   Pose T_w_c_ = Pose::Identity();
   std::vector<LandmarkId> ids_;

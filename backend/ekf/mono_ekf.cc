@@ -55,22 +55,13 @@ std::vector<std::pair<double, double>> GaussianSumDepths(const MonoEkfOptions& o
 MonoEkfEstimator::MonoEkfEstimator(const PinholeCamera& camera, const MonoEkfOptions& options)
     : camera_(camera),
       options_(options),
+      grid_(camera.width, camera.height, options.grid_cols, options.grid_rows),
       depths_(GaussianSumDepths(options)),
       state_(options.max_landmarks) {
   std::string why;
   CHECK(options.IsValid(&why)) << "MonoEkfOptions: " << why;
   CHECK(camera.IsValid(&why)) << "MonoEkfEstimator: " << why;
   CHECK(!camera.HasDistortion()) << "MonoEkfEstimator takes rectified (undistorted) pixels";
-}
-
-int MonoEkfEstimator::Zone(const Eigen::Vector2d& uv) const {
-  const int col =
-      std::clamp(static_cast<int>(std::floor(uv.x() / camera_.width * options_.grid_cols)), 0,
-                 options_.grid_cols - 1);
-  const int row =
-      std::clamp(static_cast<int>(std::floor(uv.y() / camera_.height * options_.grid_rows)), 0,
-                 options_.grid_rows - 1);
-  return row * options_.grid_cols + col;
 }
 
 void MonoEkfEstimator::StartCandidate(const FeatureObservation& obs) {
@@ -291,29 +282,18 @@ bool MonoEkfEstimator::InsertLandmark(LandmarkId id, const Candidate& c, const H
   const double dof = 2.0 * static_cast<double>(replay.size()) + 3.0;
   if (cost > dof + 3 * std::sqrt(2 * dof) || !(x.z() > 0)) return false;
   state_.AddLandmarkFromCamera(id, x, A.inverse());
-  info_[id] = LandmarkInfo{frame_index_, static_cast<int>(c.observations.size()), 0};
+  info_[id] =
+      EkfLandmarkInfo{frame_index_, frame_index_, static_cast<int>(c.observations.size()), 0};
   return true;
 }
 
 bool MonoEkfEstimator::MakeRoom() {
-  int victim = -1;
-  for (int i = 0; i < state_.num_landmarks(); ++i) {
-    const LandmarkInfo& a = info_.at(state_.id(i));
-    if (frame_index_ - a.last_seen < options_.evict_unseen_frames) continue;
-    if (victim < 0) {
-      victim = i;
-      continue;
-    }
-    const LandmarkInfo& b = info_.at(state_.id(victim));
-    if (a.observations < b.observations ||
-        (a.observations == b.observations && a.last_seen < b.last_seen)) {
-      victim = i;
-    }
-  }
-  if (victim < 0) return false;
+  const std::vector<int> order =
+      EvictionOrder(state_, info_, frame_index_, options_.evict_unseen_frames);
+  if (order.empty()) return false;
   std::vector<bool> remove(state_.num_landmarks(), false);
-  remove[victim] = true;
-  info_.erase(state_.id(victim));
+  remove[order.front()] = true;
+  info_.erase(state_.id(order.front()));
   state_.RemoveLandmarks(remove);
   return true;
 }
@@ -345,7 +325,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
 
   // EKF update with the landmarks and directions seen in this frame.
   std::vector<EkfUpdateBlock> blocks;
-  std::vector<int> zone_count(options_.grid_cols * options_.grid_rows, 0);
+  std::vector<int> zone_count(grid_.size(), 0);
   auto gated = [&](EkfUpdateBlock* b) {
     const Eigen::MatrixXd S = state_.InnovationCovariance(*b);
     const Eigen::LLT<Eigen::MatrixXd> llt(S);
@@ -356,7 +336,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
     const double s2 = obs.sigma_px * obs.sigma_px;
     const int i = state_.IndexOf(obs.landmark);
     if (i >= 0) {
-      LandmarkInfo& info = info_.at(obs.landmark);
+      EkfLandmarkInfo& info = info_.at(obs.landmark);
       Eigen::Vector2d uv;
       Eigen::Matrix<double, 2, 6> H_T;
       Eigen::Matrix<double, 2, 3> H_x;
@@ -375,7 +355,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
         info.last_seen = frame_index_;
         ++info.observations;
         info.gate_failures = 0;
-        ++zone_count[Zone(obs.uv)];
+        ++zone_count[grid_.Zone(obs.uv)];
       } else {
         ++info.gate_failures;
         ++stats_.gated_out;
@@ -403,7 +383,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
         blocks.push_back(std::move(b));
         d.last_seen = frame_index_;
         d.gate_failures = 0;
-        ++zone_count[Zone(obs.uv)];
+        ++zone_count[grid_.Zone(obs.uv)];
       } else {
         ++d.gate_failures;
         ++stats_.gated_out;
@@ -454,7 +434,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
     } else if (s != seen.end()) {
       const FeatureObservation& obs = *s->second;
       c.last_seen_frame = frame_index_;
-      ++zone_count[Zone(obs.uv)];
+      ++zone_count[grid_.Zone(obs.uv)];
       const double motion2 =
           (obs.uv - c.last_used_uv).squaredNorm() / (2 * obs.sigma_px * obs.sigma_px);
       if (motion2 > options_.min_image_motion_chi2) keep = UpdateCandidate(it->first, &c, obs);
@@ -474,14 +454,14 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   }
 
   // New candidates where zones lack landmarks.
-  const int zones = options_.grid_cols * options_.grid_rows;
+  const int zones = grid_.size();
   std::vector<std::vector<const FeatureObservation*>> fresh(zones);
   for (const FeatureObservation& obs : m.observations) {
     if (state_.IndexOf(obs.landmark) >= 0 || candidates_.count(obs.landmark) > 0 ||
         directions_.count(obs.landmark) > 0 || rejected_.count(obs.landmark) > 0) {
       continue;
     }
-    fresh[Zone(obs.uv)].push_back(&obs);
+    fresh[grid_.Zone(obs.uv)].push_back(&obs);
   }
   for (int z = 0; z < zones; ++z) {
     auto& f = fresh[z];
@@ -501,19 +481,8 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   for (const auto& [id, c] : candidates_)
     stats_.hypotheses += static_cast<int>(c.hypotheses.size());
   stats_.directions = static_cast<int>(directions_.size());
-  out.T_w_c = state_.T_w_c();
-  out.landmarks_in_state = state_.num_landmarks();
-  trajectory_.Add(m.t_ns, state_.T_w_c());
+  FinishEkfFrame(state_, m.t_ns, &out, &trajectory_);
   return out;
-}
-
-std::vector<MapPoint> MonoEkfEstimator::map() const {
-  std::vector<MapPoint> points;
-  points.reserve(state_.num_landmarks());
-  for (int i = 0; i < state_.num_landmarks(); ++i) {
-    points.push_back({state_.id(i), state_.p_w(i), info_.at(state_.id(i)).observations});
-  }
-  return points;
 }
 
 }  // namespace dala

@@ -74,6 +74,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "backend/ekf/ekf_map.h"
 #include "backend/ekf/ekf_state.h"
 #include "backend/estimator.h"
 #include "core/camera.h"
@@ -133,7 +134,7 @@ class MonoEkfEstimator : public Estimator {
   std::string mode() const override { return "mono"; }
   EstimatorOutput Add(const FrameMeasurement& m) override;
   Trajectory trajectory() const override { return trajectory_; }
-  std::vector<MapPoint> map() const override;
+  std::vector<MapPoint> map() const override { return EkfMapPoints(state_, info_); }
 
   const EkfState& state() const { return state_; }
   Matrix6d pose_covariance() const { return state_.pose_covariance(); }
@@ -172,11 +173,6 @@ class MonoEkfEstimator : public Estimator {
     int last_seen = 0;
     int gate_failures = 0;
   };
-  struct LandmarkInfo {
-    int last_seen = 0;
-    int observations = 0;
-    int gate_failures = 0;
-  };
   struct PoseRecord {
     Pose T_w_c;
     Matrix6d cov;
@@ -195,13 +191,13 @@ class MonoEkfEstimator : public Estimator {
   // refined point disagrees with them (the candidate is then dropped).
   bool InsertLandmark(LandmarkId id, const Candidate& c, const Hypothesis& h);
   bool MakeRoom();
-  int Zone(const Eigen::Vector2d& uv) const;
 
   PinholeCamera camera_;
   MonoEkfOptions options_;
+  ImageGrid grid_;
   std::vector<std::pair<double, double>> depths_;
   EkfState state_;
-  std::unordered_map<LandmarkId, LandmarkInfo> info_;
+  EkfLandmarkInfoMap info_;
   std::map<LandmarkId, Candidate> candidates_;  // Ordered: deterministic iteration.
   std::map<LandmarkId, Direction> directions_;
   std::unordered_set<LandmarkId> rejected_;

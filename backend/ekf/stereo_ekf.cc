@@ -22,6 +22,7 @@ bool StereoEkfOptions::IsValid(std::string* why) const {
   if (!(max_relative_depth_sigma > 0)) os << "max_relative_depth_sigma must be > 0; ";
   if (!(gate_chi2 > 0) || !(loop_gate_chi2 > 0)) os << "gate_chi2 and loop_gate_chi2 must be > 0; ";
   if (loop_min_gap_frames < 2) os << "loop_min_gap_frames must be >= 2; ";
+  if (!(motion_covariance_scale > 0)) os << "motion_covariance_scale must be > 0; ";
   if (max_gate_failures < 1) os << "max_gate_failures must be >= 1; ";
   if (max_batch_observations < 1) os << "max_batch_observations must be >= 1; ";
   if (evict_unseen_frames < 1) os << "evict_unseen_frames must be >= 1; ";
@@ -33,21 +34,14 @@ bool StereoEkfOptions::IsValid(std::string* why) const {
 }
 
 StereoEkfEstimator::StereoEkfEstimator(const StereoRig& rig, const StereoEkfOptions& options)
-    : rig_(rig), options_(options), state_(options.max_landmarks) {
+    : rig_(rig),
+      options_(options),
+      grid_(rig.left.width, rig.left.height, options.grid_cols, options.grid_rows),
+      state_(options.max_landmarks) {
   std::string why;
   CHECK(options.IsValid(&why)) << "StereoEkfOptions: " << why;
   CHECK(rig.IsValid(&why)) << "StereoEkfEstimator: " << why;
   CHECK(rig.is_stereo()) << "StereoEkfEstimator needs a stereo rig (baseline > 0)";
-}
-
-int StereoEkfEstimator::Zone(const Eigen::Vector2d& uv) const {
-  const int col =
-      std::clamp(static_cast<int>(std::floor(uv.x() / rig_.left.width * options_.grid_cols)), 0,
-                 options_.grid_cols - 1);
-  const int row =
-      std::clamp(static_cast<int>(std::floor(uv.y() / rig_.left.height * options_.grid_rows)), 0,
-                 options_.grid_rows - 1);
-  return row * options_.grid_cols + col;
 }
 
 bool StereoEkfEstimator::MakeBlock(int i, const FeatureObservation& obs,
@@ -75,7 +69,7 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
     state_.Reset(Pose::Identity(), Matrix6d::Zero());
     out.valid = true;
   } else if (m.motion.has_value()) {
-    state_.Predict(m.motion->T_prev_cur, m.motion->cov);
+    state_.Predict(m.motion->T_prev_cur, options_.motion_covariance_scale * m.motion->cov);
     out.valid = true;
   } else {
     Vector6d var;
@@ -86,11 +80,18 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
   }
 
   // Observations of landmarks in the state, split into loop re-observations and regular ones.
+  // A loop re-observation is one of a landmark the frontend relabelled at a recognised place
+  // (m.loop), or of a landmark unseen for loop_min_gap_frames (a tracker that keeps ids).
+  std::unordered_set<LandmarkId> relabelled;
+  if (m.loop.has_value()) {
+    for (const auto& [current, old] : m.loop->relabelled) relabelled.insert(old);
+  }
   std::vector<const FeatureObservation*> old_obs, regular_obs;
   for (const FeatureObservation& obs : m.observations) {
     if (!obs.has_stereo() || state_.IndexOf(obs.landmark) < 0) continue;
-    const LandmarkInfo& info = info_.at(obs.landmark);
-    if (frame_index_ - info.last_seen >= options_.loop_min_gap_frames) {
+    const EkfLandmarkInfo& info = info_.at(obs.landmark);
+    if (relabelled.count(obs.landmark) > 0 ||
+        frame_index_ - info.last_seen >= options_.loop_min_gap_frames) {
       old_obs.push_back(&obs);
     } else {
       regular_obs.push_back(&obs);
@@ -99,7 +100,7 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
   std::unordered_map<LandmarkId, Eigen::Vector2d> seen_uv;  // Applied this frame.
   auto gate = [&](const FeatureObservation& obs, double chi2, EkfUpdateBlock* block) {
     const int i = state_.IndexOf(obs.landmark);
-    LandmarkInfo& info = info_.at(obs.landmark);
+    EkfLandmarkInfo& info = info_.at(obs.landmark);
     bool ok = MakeBlock(i, obs, block);
     if (ok) {
       const Eigen::MatrixXd S = state_.InnovationCovariance(*block);
@@ -159,9 +160,9 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
   if (any) state_.RemoveLandmarks(remove);
 
   // New landmarks where zones lack them.
-  const int zones = options_.grid_cols * options_.grid_rows;
+  const int zones = grid_.size();
   std::vector<int> count(zones, 0);
-  for (const auto& [id, uv] : seen_uv) ++count[Zone(uv)];
+  for (const auto& [id, uv] : seen_uv) ++count[grid_.Zone(uv)];
   std::vector<std::vector<const FeatureObservation*>> candidates(zones);
   for (const FeatureObservation& obs : m.observations) {
     if (!obs.has_stereo() || !(obs.disparity() > 0) || state_.IndexOf(obs.landmark) >= 0 ||
@@ -170,7 +171,7 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
     }
     if (obs.track_length < options_.min_track_length || !(obs.p_c0.z() > 0)) continue;
     if (std::sqrt(obs.cov_p_c0(2, 2)) > options_.max_relative_depth_sigma * obs.p_c0.z()) continue;
-    candidates[Zone(obs.uv)].push_back(&obs);
+    candidates[grid_.Zone(obs.uv)].push_back(&obs);
   }
   std::vector<const FeatureObservation*> to_add;
   for (int z = 0; z < zones; ++z) {
@@ -188,20 +189,9 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
   const int deficit =
       static_cast<int>(to_add.size()) - (state_.max_landmarks() - state_.num_landmarks());
   if (deficit > 0) {
-    // Evict landmarks unseen for long: fewest observations first, then the oldest.
-    std::vector<int> evictable;
-    for (int i = 0; i < state_.num_landmarks(); ++i) {
-      if (frame_index_ - info_.at(state_.id(i)).last_seen >= options_.evict_unseen_frames) {
-        evictable.push_back(i);
-      }
-    }
-    std::sort(evictable.begin(), evictable.end(), [&](int a, int b) {
-      const LandmarkInfo& ia = info_.at(state_.id(a));
-      const LandmarkInfo& ib = info_.at(state_.id(b));
-      if (ia.observations != ib.observations) return ia.observations < ib.observations;
-      if (ia.last_seen != ib.last_seen) return ia.last_seen < ib.last_seen;
-      return a < b;
-    });
+    // Evict landmarks unseen for long (ekf_map.h: fewest observations, then the newest first).
+    const std::vector<int> evictable =
+        EvictionOrder(state_, info_, frame_index_, options_.evict_unseen_frames);
     std::vector<bool> evict(state_.num_landmarks(), false);
     const int n = std::min<int>(deficit, static_cast<int>(evictable.size()));
     for (int k = 0; k < n; ++k) {
@@ -214,23 +204,12 @@ EstimatorOutput StereoEkfEstimator::Add(const FrameMeasurement& m) {
   for (const FeatureObservation* obs : to_add) {
     if (state_.full()) break;
     state_.AddLandmarkFromCamera(obs->landmark, obs->p_c0, obs->cov_p_c0);
-    info_[obs->landmark] = LandmarkInfo{frame_index_, 1, 0};
+    info_[obs->landmark] = EkfLandmarkInfo{frame_index_, frame_index_, 1, 0};
     ++stats_.added;
   }
 
-  out.T_w_c = state_.T_w_c();
-  out.landmarks_in_state = state_.num_landmarks();
-  trajectory_.Add(m.t_ns, state_.T_w_c());
+  FinishEkfFrame(state_, m.t_ns, &out, &trajectory_);
   return out;
-}
-
-std::vector<MapPoint> StereoEkfEstimator::map() const {
-  std::vector<MapPoint> points;
-  points.reserve(state_.num_landmarks());
-  for (int i = 0; i < state_.num_landmarks(); ++i) {
-    points.push_back({state_.id(i), state_.p_w(i), info_.at(state_.id(i)).observations});
-  }
-  return points;
 }
 
 }  // namespace dala

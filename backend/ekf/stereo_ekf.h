@@ -8,27 +8,30 @@
 // is the first frame's left camera (its pose has zero covariance).
 //
 // Per frame (FrameMeasurement m):
-//  1. Prediction with the frontend's visual motion m.motion = (T_prev_cur, Q):
-//     T_w_cur = T_w_prev T_prev_cur, F = Adj(T_prev_cur^-1), G = I. Without motion (lost) the pose
-//     is kept, its covariance inflated by `lost_*_sigma`, and the frame is reported not valid.
+//  1. Prediction with the frontend's visual motion m.motion = (T_prev_cur, Q), Q scaled by
+//     motion_covariance_scale: T_w_cur = T_w_prev T_prev_cur (ekf_state.h). Without motion
+//     (lost) the pose is kept, its covariance inflated by `lost_*_sigma`, and the frame is reported
+//     not valid.
 //  2. Observation of each tracked landmark in the state (data association = the frontend's
 //     persistent landmark ids): z = (u, v, d = u - u_right), h = ProjectStereo(T_w_c^-1 p_w),
 //     R = s^2 [1 0 1; 0 1 0; 1 0 2] (u, v, u_right independent, s = sigma_px). Each observation is
 //     gated alone with its innovation r^T S^-1 r < chi2_3(99 %) = 11.34, then the gated ones are
 //     applied in symmetric batched updates of `max_batch_observations`, each relinearised.
-//     Loop closing: a landmark not seen for `loop_min_gap_frames` is "old"; its re-observation is
+//     Loop closing: a landmark the frontend relabelled at a recognised place (m.loop->relabelled
+//     old ids) or not seen for `loop_min_gap_frames` is "old"; its re-observation is
 //     applied first, one landmark at a time (each relinearised at the state corrected by the
 //     previous ones), with a relaxed gate chi2_3(99.99 %) = 21.1: the innovation covariance already
 //     holds the drift accumulated since, but the first correction after a long gap is large and the
 //     linearisation error then adds to the innovation; relinearising per landmark makes the
-//     following ones small.
+//     following ones small. EstimatorOutput::loop_closed is set when one was applied.
 //  3. Map management: the image is cut in grid_cols x grid_rows zones; in every zone with fewer
 //     than `target_per_zone` landmarks observed this frame, up to `new_per_zone_per_frame` new
 //     landmarks are initialised from the frontend's stereo point (p_c0, cov_p_c0) with the full
-//     cross-covariance (longest tracks first). The state is bounded (`max_landmarks`); when full,
-//     landmarks not seen for `evict_unseen_frames` make room (fewest observations, then oldest
-//     first). A landmark that fails gating `max_gate_failures` times in a row is removed (and its
-//     id never re-initialised: its track is likely a mismatch).
+//     cross-covariance (longest tracks first). The state is bounded (`max_landmarks`); landmarks
+//     that left the view are kept (a loop re-observes them); when full, landmarks not seen for
+//     `evict_unseen_frames` make room (ekf_map.h: fewest observations, then newest first). A
+//     landmark that fails gating `max_gate_failures` times in a row is removed (and its id never
+//     re-initialised: its track is likely a mismatch).
 //
 // Not thread-safe. Deterministic.
 
@@ -37,6 +40,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "backend/ekf/ekf_map.h"
 #include "backend/ekf/ekf_state.h"
 #include "backend/estimator.h"
 #include "core/camera.h"
@@ -68,6 +72,12 @@ struct StereoEkfOptions {
   int max_gate_failures = 3;
   // When the state is full, landmarks unseen for at least this many frames may be evicted.
   int evict_unseen_frames = 10;
+  // The motion covariance m.motion->cov is multiplied by this in the prediction. A visual motion
+  // computed from the same stereo points that then update the filter counts that information
+  // twice: with a consistent motion covariance the filter needs x3 (docs/ekf.md, simulation:
+  // pose NEES 10.7 as is, 6.4 with x3). dala's frontend reports a conservative covariance (its
+  // motion NEES is 0.43 on a rendered rover sequence) which already covers that: 1.
+  double motion_covariance_scale = 1.0;
   // Pose covariance added per frame without motion estimate (rad, m).
   double lost_rotation_sigma = 0.05;
   double lost_translation_sigma = 0.5;
@@ -93,26 +103,21 @@ class StereoEkfEstimator : public Estimator {
   std::string mode() const override { return "stereo"; }
   EstimatorOutput Add(const FrameMeasurement& m) override;
   Trajectory trajectory() const override { return trajectory_; }
-  std::vector<MapPoint> map() const override;
+  std::vector<MapPoint> map() const override { return EkfMapPoints(state_, info_); }
 
   const EkfState& state() const { return state_; }
   Matrix6d pose_covariance() const { return state_.pose_covariance(); }
   const StereoEkfFrameStats& last_stats() const { return stats_; }
 
  private:
-  struct LandmarkInfo {
-    int last_seen = 0;  // Frame index of the last applied observation.
-    int observations = 0;
-    int gate_failures = 0;  // Consecutive.
-  };
   // Builds the update block of one observation of state landmark i; false if behind the camera.
   bool MakeBlock(int i, const FeatureObservation& obs, EkfUpdateBlock* block) const;
-  int Zone(const Eigen::Vector2d& uv) const;
 
   StereoRig rig_;
   StereoEkfOptions options_;
+  ImageGrid grid_;
   EkfState state_;
-  std::unordered_map<LandmarkId, LandmarkInfo> info_;
+  EkfLandmarkInfoMap info_;
   std::unordered_set<LandmarkId> rejected_;  // Removed after gating failures: not re-added.
   Trajectory trajectory_;
   int frame_index_ = -1;

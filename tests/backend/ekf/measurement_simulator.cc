@@ -1,7 +1,9 @@
 #include "tests/backend/ekf/measurement_simulator.h"
 
 #include <cmath>
+#include <optional>
 #include <random>
+#include <utility>
 
 namespace dala::testing {
 
@@ -17,6 +19,38 @@ StereoRig SimRig() {
 }
 
 namespace {
+
+struct StereoPoint {
+  Eigen::Vector3d p_c;
+  Eigen::Matrix3d cov;
+};
+
+// Weighted 3D-3D alignment a_k = T b_k (T = T_prev_cur), Gauss-Newton from T0 with the right
+// perturbation T Exp([phi; rho]): d(T Exp(d) b)/d d = [-R [b]x, R]; weight (A + R B R^T)^-1.
+MotionEstimate AlignStereoPoints(const std::vector<std::pair<StereoPoint, StereoPoint>>& pairs,
+                                 const Pose& T0) {
+  MotionEstimate motion;
+  Pose T = T0;
+  Matrix6d JtWJ = Matrix6d::Identity();
+  for (int iteration = 0; iteration < 6; ++iteration) {
+    JtWJ.setZero();
+    Vector6d JtWr = Vector6d::Zero();
+    const Eigen::Matrix3d R = T.linear();
+    for (const auto& [a, b] : pairs) {
+      const Eigen::Matrix3d W = (a.cov + R * b.cov * R.transpose()).inverse();
+      Eigen::Matrix<double, 3, 6> J;
+      J << -R * Skew(b.p_c), R;
+      const Eigen::Vector3d r = a.p_c - T * b.p_c;
+      JtWJ += J.transpose() * W * J;
+      JtWr += J.transpose() * W * r;
+    }
+    T = Orthonormalized(T * ExpSE3(JtWJ.ldlt().solve(JtWr)));
+  }
+  motion.T_prev_cur = T;
+  motion.cov = JtWJ.inverse();
+  motion.inliers = motion.correspondences = static_cast<int>(pairs.size());
+  return motion;
+}
 
 Pose PathPose(const SimOptions& o, int i) {
   const double t = static_cast<double>(i);
@@ -75,9 +109,11 @@ SimStream Simulate(const SimOptions& o) {
   const int n = static_cast<int>(s.points_w.size());
   std::vector<int64_t> id(n);
   std::vector<int> last_seen(n, -1000), track(n, 0);
+  std::vector<bool> seen_early(n, false);  // Seen in the first loop_old_frames frames.
   for (int j = 0; j < n; ++j) id[j] = j;
   int64_t next_id = n;
   Pose T_dr = Pose::Identity();
+  std::vector<std::optional<StereoPoint>> previous(n), current(n);
   for (int i = 0; i < o.frames; ++i) {
     FrameMeasurement m;
     m.frame = FrameId(i);
@@ -100,9 +136,7 @@ SimStream Simulate(const SimOptions& o) {
       motion.scale_known = true;
       m.motion = motion;
       if (o.fill_odometry) m.odometry = motion;
-      T_dr = Orthonormalized(T_dr * motion.T_prev_cur);
     }
-    s.dead_reckoning.Add(m.t_ns, T_dr);
     const Pose T_c_w = s.T_w_c_gt[i].inverse();
     for (int j = 0; j < n; ++j) {
       const Eigen::Vector3d p_c = T_c_w * s.points_w[j];
@@ -124,16 +158,46 @@ SimStream Simulate(const SimOptions& o) {
         Eigen::Matrix3d R;
         R << 1, 0, 1, 0, 1, 0, 1, 0, 2;
         obs.cov_p_c0 = J * (o.sigma_px * o.sigma_px * R) * J.transpose();
+        current[j] = StereoPoint{obs.p_c0, obs.cov_p_c0};
       }
       if (last_seen[j] < i - 1) {
         track[j] = 0;
         if (!o.persistent_ids && last_seen[j] >= 0) id[j] = next_id++;
+      }
+      if (i < o.loop_old_frames && id[j] == j) seen_early[j] = true;
+      if (i == o.loop_frame && seen_early[j] && id[j] != j) {
+        if (!m.loop.has_value()) {
+          m.loop = LoopDetection();
+          m.is_keyframe = true;
+          m.loop->old_frame = FrameId(0);
+          m.loop->T_old_cur = s.T_w_c_gt[i];  // T_w_c0 with the first frame as the world.
+        }
+        m.loop->relabelled.emplace_back(LandmarkId(id[j]), LandmarkId(j));
+        ++m.loop->inliers;
+        id[j] = j;
       }
       last_seen[j] = i;
       obs.track_length = ++track[j];
       obs.landmark = LandmarkId(id[j]);
       m.observations.push_back(obs);
     }
+    if (m.motion.has_value() && o.motion_from_stereo_points) {
+      std::vector<std::pair<StereoPoint, StereoPoint>> pairs;
+      for (int j = 0; j < n; ++j) {
+        if (previous[j].has_value() && current[j].has_value()) {
+          pairs.emplace_back(*previous[j], *current[j]);
+        }
+      }
+      if (pairs.size() >= 3) {
+        const Pose M_true = s.T_w_c_gt[i - 1].inverse() * s.T_w_c_gt[i];
+        m.motion = AlignStereoPoints(pairs, M_true);
+        if (o.fill_odometry) m.odometry = m.motion;
+      }
+    }
+    if (m.motion.has_value()) T_dr = Orthonormalized(T_dr * m.motion->T_prev_cur);
+    s.dead_reckoning.Add(m.t_ns, T_dr);
+    previous.swap(current);
+    for (auto& p : current) p.reset();
     s.frames.push_back(std::move(m));
   }
   return s;

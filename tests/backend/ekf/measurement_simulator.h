@@ -43,10 +43,21 @@ struct SimOptions {
   double motion_sigma_rot = 0.002;
   double motion_sigma_trans = 0.01;
   bool fill_odometry = false;
+  // Motion estimated from the same noisy stereo points that the frame's observations carry
+  // (weighted 3D-3D least squares between the previous and the current frame, covariance
+  // (J^T W J)^-1), as a real frontend's visual odometry: its error is then correlated with the
+  // observations. motion_sigma_* are ignored (their draws still happen: same random stream).
+  bool motion_from_stereo_points = false;
   std::set<int> lost_frames;  // Frames without motion estimate (status kLost).
   // A point unseen for more than one frame gets a new landmark id (as a tracker does), unless
   // persistent_ids (as when loop recognition gives the old ids back).
   bool persistent_ids = false;
+  // Loop recognition as the frontend does it (core/frame_measurement.h, LoopDetection): at frame
+  // `loop_frame` (if >= 0), every observed point that was seen in the first `loop_old_frames`
+  // frames is relabelled with the id it had then, m.loop lists the (current, old) pairs, and the
+  // track continues under the old id. Not combined with persistent_ids.
+  int loop_frame = -1;
+  int loop_old_frames = 10;
   uint32_t seed = 1;
 };
 

@@ -58,42 +58,107 @@ TEST(StereoEkfTest, BeatsDeadReckoningOnCurvedPath) {
   EXPECT_GT(max_state, 30);
 }
 
-TEST(StereoEkfTest, PoseNeesIsConsistentOverMonteCarloRuns) {
-  const int runs = 25, frames = 40;
+// Average pose NEES per frame over seeded Monte Carlo runs (40 frames, 400 points, curved path)
+// and its 95 % band: for r runs, r * NEES ~ chi2(6 r).
+struct NeesCurve {
+  std::vector<double> nees;  // Frames 1..; frame 0 is the world frame (zero covariance).
+  double lo = 0, hi = 0, mean = 0;
+  int outside = 0;
+};
+
+NeesCurve MonteCarloPoseNees(int runs, int frames, bool motion_from_stereo_points,
+                             const StereoEkfOptions& options = {}) {
   std::vector<double> nees_sum(frames, 0.0);
   for (int run = 0; run < runs; ++run) {
     SimOptions o;
     o.frames = frames;
     o.num_points = 400;
     o.seed = 100 + run;
+    o.motion_from_stereo_points = motion_from_stereo_points;
     const SimStream s = Simulate(o);
-    StereoEkfEstimator ekf(s.rig);
+    StereoEkfEstimator ekf(s.rig, options);
     for (int i = 0; i < frames; ++i) {
       ekf.Add(s.frames[i]);
-      if (i == 0) continue;  // The world frame: zero covariance, zero error.
+      if (i == 0) continue;
       const Vector6d e = LogSE3(ekf.state().T_w_c().inverse() * s.T_w_c_gt[i]);
       nees_sum[i] += e.dot(ekf.pose_covariance().ldlt().solve(e));
     }
   }
-  const double lo = Chi2Quantile(-1.959964, 6.0 * runs) / runs;
-  const double hi = Chi2Quantile(1.959964, 6.0 * runs) / runs;
-  int outside = 0;
-  double mean = 0;
-  std::printf("stereo EKF average pose NEES per frame (95%% bounds %.2f..%.2f):\n", lo, hi);
+  NeesCurve c;
+  c.lo = Chi2Quantile(-1.959964, 6.0 * runs) / runs;
+  c.hi = Chi2Quantile(1.959964, 6.0 * runs) / runs;
   for (int i = 1; i < frames; ++i) {
     const double nees = nees_sum[i] / runs;
-    mean += nees / (frames - 1);
-    std::printf("%.2f%s", nees, i % 13 == 0 ? "\n" : " ");
-    if (nees < lo || nees > hi) ++outside;
+    c.nees.push_back(nees);
+    c.mean += nees / (frames - 1);
+    if (nees < c.lo || nees > c.hi) ++c.outside;
   }
-  std::printf("\nmean %.2f, %d of %d frames outside\n", mean, outside, frames - 1);
-  // Measured (25 runs x 40 frames): mean 6.89 inside the bounds, but 11 of 39 frames slightly
-  // above the upper bound (max 9.2), growing with time: the usual mild overconfidence of
-  // EKF-SLAM (docs/ekf.md). The brief's "at most a few frames outside" is NOT met; this asserts
-  // the measured state so that a regression shows.
-  EXPECT_LE(outside, 13);
-  EXPECT_GT(mean, lo);
-  EXPECT_LT(mean, hi);
+  return c;
+}
+
+void PrintNees(const char* what, const NeesCurve& c) {
+  std::printf("%s: average pose NEES per frame (95%% band %.2f..%.2f):\n", what, c.lo, c.hi);
+  for (size_t i = 0; i < c.nees.size(); ++i) {
+    std::printf("%.2f%s", c.nees[i], (i + 1) % 13 == 0 ? "\n" : " ");
+  }
+  std::printf("mean %.2f, %d of %zu frames outside\n", c.mean, c.outside, c.nees.size());
+}
+
+TEST(StereoEkfTest, PoseNeesIsConsistentOverMonteCarloRuns) {
+  // Motion noise independent of the image noise, with its exact covariance: no inflation.
+  StereoEkfOptions options;
+  options.motion_covariance_scale = 1.0;
+  const NeesCurve c = MonteCarloPoseNees(25, 40, false, options);
+  PrintNees("stereo EKF, independent motion noise", c);
+  // docs/ekf.md. With the classic error state the mean was 6.87 and 11 of 39 frames were above
+  // the band, growing with time (spurious information on the unobservable directions).
+  EXPECT_LE(c.outside, 4);  // About 10 %; 5 % expected by chance.
+  EXPECT_GT(c.mean, c.lo);
+  EXPECT_LT(c.mean, c.hi);
+}
+
+// A real frontend's motion comes from the same stereo points that update the filter. The motion
+// estimate alone is consistent (its NEES against the true motion is ~6), but used as the
+// prediction its information is counted twice: the filter is overconfident unless the motion
+// covariance is inflated (StereoEkfOptions::motion_covariance_scale x3; docs/ekf.md).
+TEST(StereoEkfTest, PoseNeesWithMotionFromTheSameStereoPoints) {
+  // The motion estimate against the truth.
+  double motion_nees = 0;
+  int motions = 0;
+  for (int run = 0; run < 5; ++run) {
+    SimOptions o;
+    o.frames = 40;
+    o.num_points = 400;
+    o.seed = 100 + run;
+    o.motion_from_stereo_points = true;
+    const SimStream s = Simulate(o);
+    for (int i = 1; i < o.frames; ++i) {
+      const Pose M_true = s.T_w_c_gt[i - 1].inverse() * s.T_w_c_gt[i];
+      const Vector6d e = LogSE3(s.frames[i].motion->T_prev_cur.inverse() * M_true);
+      motion_nees += e.dot(s.frames[i].motion->cov.ldlt().solve(e));
+      ++motions;
+    }
+  }
+  motion_nees /= motions;
+  std::printf("motion from stereo points: NEES %.2f over %d motions\n", motion_nees, motions);
+  const double lo = Chi2Quantile(-2.575829, 6.0 * motions) / motions;
+  const double hi = Chi2Quantile(2.575829, 6.0 * motions) / motions;
+  EXPECT_GT(motion_nees, lo);
+  EXPECT_LT(motion_nees, hi);
+
+  StereoEkfOptions counted_twice;
+  counted_twice.motion_covariance_scale = 1.0;
+  const NeesCurve c1 = MonteCarloPoseNees(25, 40, true, counted_twice);
+  PrintNees("stereo EKF, motion from the same points, motion covariance as is", c1);
+  StereoEkfOptions inflated;
+  inflated.motion_covariance_scale = 3.0;
+  const NeesCurve c3 = MonteCarloPoseNees(25, 40, true, inflated);
+  PrintNees("stereo EKF, motion from the same points, motion covariance x3", c3);
+  // Measured: mean 10.7 (37 of 39 frames above the band) as is; 6.43 (2 outside) with x3.
+  EXPECT_GT(c1.mean, c1.hi);
+  EXPECT_GT(c3.mean, c3.lo);
+  EXPECT_LT(c3.mean, c3.hi);
+  EXPECT_LE(c3.outside, 4);
 }
 
 TEST(StereoEkfTest, MapIsBoundedAndSpreadOverZones) {
@@ -223,6 +288,73 @@ TEST(StereoEkfTest, ReobservingOldLandmarksClosesTheLoop) {
   EXPECT_EQ(loops[0], 0);
   EXPECT_GT(loops[1], 0);
   EXPECT_LT(ate[1], ate[0]);
+}
+
+// The frontend's loop closing (LoopDetection): on a circle, the tracker gives new ids when the
+// camera comes back, and at frame kLoop the recognised place relabels the current observations
+// with the ids of the first frames. The filter, which kept those landmarks, re-observes them: the
+// pose error must drop at the loop frame and the NEES stay consistent afterwards.
+TEST(StereoEkfTest, LoopDetectionRelabellingCorrectsTheDrift) {
+  constexpr int kLoop = 126;  // The circle closes at frame 125 (1.2 turns over 150 frames).
+  const int seeds = 3;
+  double err_before_sum = 0, err_after_sum = 0, nees_after_sum = 0, ate_sum[2] = {0, 0};
+  int nees_count = 0, loop_updates = 0;
+  for (int seed = 0; seed < seeds; ++seed) {
+    for (int with_loop = 0; with_loop < 2; ++with_loop) {
+      SimOptions o;
+      o.path = SimPath::kCircle;
+      o.frames = 150;
+      o.turns = 1.2;
+      o.radius = 10.0;
+      o.num_points = 300;
+      o.point_min_depth = 3;
+      o.point_max_depth = 10;
+      o.sigma_px = 1.0;
+      o.motion_sigma_rot = 0.01;
+      o.motion_sigma_trans = 0.05;
+      o.seed = 300 + seed;
+      o.loop_frame = with_loop ? kLoop : -1;
+      o.loop_old_frames = 10;
+      const SimStream s = Simulate(o);
+      if (with_loop) {
+        ASSERT_TRUE(s.frames[kLoop].loop.has_value());
+        ASSERT_GT(s.frames[kLoop].loop->relabelled.size(), 10u);
+      }
+      StereoEkfOptions options;               // Default map management: 300 landmarks at most.
+      options.motion_covariance_scale = 1.0;  // Independent motion noise, exact covariance.
+      StereoEkfEstimator ekf(s.rig, options);
+      for (int i = 0; i < o.frames; ++i) {
+        const EstimatorOutput out = ekf.Add(s.frames[i]);
+        EXPECT_EQ(out.loop_closed, with_loop == 1 && i == kLoop) << "frame " << i;
+        if (!with_loop) continue;
+        const double err = (out.T_w_c.translation() - s.T_w_c_gt[i].translation()).norm();
+        if (i == kLoop - 1) err_before_sum += err;
+        if (i == kLoop) {
+          err_after_sum += err;
+          loop_updates += ekf.last_stats().loop_updates;
+        }
+        if (i >= kLoop) {
+          const Vector6d e = LogSE3(ekf.state().T_w_c().inverse() * s.T_w_c_gt[i]);
+          nees_after_sum += e.dot(ekf.pose_covariance().ldlt().solve(e));
+          ++nees_count;
+        }
+      }
+      ate_sum[with_loop] += AteRmse(s.gt, ekf.trajectory());
+    }
+  }
+  const double nees_after = nees_after_sum / nees_count;
+  std::printf(
+      "loop (%d seeds): position error %.3f m before the loop frame, %.3f m at it (%.1f loop "
+      "updates per run); ATE %.3f m without loop, %.3f m with; NEES after the loop %.2f\n",
+      seeds, err_before_sum / seeds, err_after_sum / seeds, double(loop_updates) / seeds,
+      ate_sum[0] / seeds, ate_sum[1] / seeds, nees_after);
+  EXPECT_LT(err_after_sum, 0.5 * err_before_sum);
+  EXPECT_LT(ate_sum[1], ate_sum[0]);
+  EXPECT_GT(loop_updates, 10 * seeds);
+  // Pose NEES (6 dof) averaged over the 24 frames after the loop and the seeds. The frames of one
+  // run are strongly correlated, so the honest reference is the 99 % bound of a 3-run average of
+  // chi2(6), 11.6 (measured: 7.9 with 3 seeds, 6.8 with 5; a broken loop update gives hundreds).
+  EXPECT_LT(nees_after, 11.6);
 }
 
 TEST(StereoEkfTest, Deterministic) {
