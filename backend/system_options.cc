@@ -44,6 +44,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("stereo", "min_depth_m", &s.min_depth_m);
   v->Field("stereo", "max_depth_m", &s.max_depth_m);
   v->Field("stereo", "max_depth_baselines", &s.max_depth_baselines);
+  v->Field("stereo", "min_points_with_depth", &s.min_points_with_depth);
   v->Field("stereo", "refine_disparity", &s.refine_disparity);
   v->Field("stereo", "refine_window", &s.refine_window);
   v->Field("stereo", "sigma_px", &s.sigma_px);

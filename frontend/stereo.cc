@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 namespace dala {
 namespace {
@@ -55,15 +55,16 @@ bool StereoOptions::IsValid(std::string* why) const {
   if (max_dv_px <= 0) return fail("stereo.max_dv_px must be > 0");
   if (min_depth_m <= 0 || max_depth_m <= min_depth_m)
     return fail("stereo: need 0 < min_depth_m < max_depth_m");
-  if (!(max_depth_baselines > 0)) return fail("stereo.max_depth_baselines must be > 0");
+  if (!(max_depth_baselines >= 0))
+    return fail("stereo.max_depth_baselines must be >= 0 (0: no limit)");
+  if (min_points_with_depth < 0) return fail("stereo.min_points_with_depth must be >= 0");
   if (refine_window < 3 || refine_window % 2 == 0)
     return fail("stereo.refine_window must be odd and >= 3");
   if (sigma_px <= 0 || sigma_disparity <= 0) return fail("stereo sigmas must be > 0");
   return true;
 }
 
-std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig,
-                                                    const DetectedImage& left,
+std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig, const DetectedImage& left,
                                                     const DetectedImage& right,
                                                     const cv::Mat& left_gray,
                                                     const cv::Mat& right_gray,
@@ -73,8 +74,11 @@ std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig,
   const double min_disparity = fb / options.max_depth_m;
   const double max_disparity = fb / options.min_depth_m;
   // Depth is kept from this disparity up (see the depth limit in stereo.h).
-  const double min_disparity_kept =
-      fb / std::min(options.max_depth_m, options.max_depth_baselines * rig.baseline);
+  const double max_depth_kept =
+      options.max_depth_baselines > 0
+          ? std::min(options.max_depth_m, options.max_depth_baselines * rig.baseline)
+          : options.max_depth_m;
+  const double min_disparity_kept = fb / max_depth_kept;
   const MatchPrior prior =
       MatchPrior::RectifiedStereo(options.max_dv_px, min_disparity, max_disparity);
   MatcherOptions matcher = options.matcher;
@@ -85,20 +89,44 @@ std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig,
   const std::vector<Match> matches = MatchPoints(left, right, matcher, &prior);
 
   std::vector<std::optional<StereoPoint>> out(left.points.size());
+  std::vector<std::pair<double, int>> far;  // (disparity, left index) beyond the depth limit.
+  std::vector<Eigen::Vector3d> uvd_of(left.points.size());
+  int kept = 0;
   for (const Match& m : matches) {
     const Eigen::Vector2d& uv = left.points[m.i].uv;
-    const double u_right =
-        options.refine_disparity
-            ? RefineRightAbscissa(left_gray, right_gray, uv, right.points[m.j].uv.x(),
-                                  options.refine_window)
-            : right.points[m.j].uv.x();
+    const double u_right = options.refine_disparity ? RefineRightAbscissa(left_gray, right_gray, uv,
+                                                                          right.points[m.j].uv.x(),
+                                                                          options.refine_window)
+                                                    : right.points[m.j].uv.x();
     const Eigen::Vector3d uvd(uv.x(), uv.y(), uv.x() - u_right);
-    if (uvd.z() < min_disparity_kept || uvd.z() > max_disparity) continue;
+    if (uvd.z() < min_disparity || uvd.z() > max_disparity) continue;
     StereoPoint sp;
     sp.u_right = u_right;
     if (!rig.Triangulate(uvd, &sp.p_c0)) continue;
+    if (uvd.z() < min_disparity_kept) {
+      far.emplace_back(uvd.z(), m.i);
+      uvd_of[m.i] = uvd;
+      out[m.i] = sp;  // Provisional: removed below unless too few points are near.
+      continue;
+    }
     sp.cov_p_c0 = rig.TriangulationCovariance(uvd, options.sigma_px, options.sigma_disparity);
     out[m.i] = sp;
+    ++kept;
+  }
+  // Too few near points (an open place, a low-resolution rig) would leave the visual motion
+  // without enough 3D-2D correspondences: then the nearest far points keep their depth too, a
+  // biased scale being better than a lost frame. Sorted by disparity, then index: deterministic.
+  std::sort(far.begin(), far.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
+  });
+  for (const auto& [disparity, i] : far) {
+    if (kept < options.min_points_with_depth) {
+      out[i]->cov_p_c0 =
+          rig.TriangulationCovariance(uvd_of[i], options.sigma_px, options.sigma_disparity);
+      ++kept;
+    } else {
+      out[i].reset();
+    }
   }
   return out;
 }

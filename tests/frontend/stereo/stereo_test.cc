@@ -154,6 +154,7 @@ TEST(Stereo, DepthIsKeptOnlyUpToTheBaselineLimit) {
   far.max_depth_baselines = 1e3;
   StereoOptions near = far;
   near.max_depth_baselines = 20.0;
+  near.min_points_with_depth = 0;
   const auto all = MatchStereo(rig, left, right, frame.left, frame.right, far);
   const auto kept = MatchStereo(rig, left, right, frame.left, frame.right, near);
   int n_all = 0, n_kept = 0, n_far = 0;
@@ -169,8 +170,31 @@ TEST(Stereo, DepthIsKeptOnlyUpToTheBaselineLimit) {
   }
   EXPECT_GT(n_far, 50);
   EXPECT_EQ(n_kept, n_all - n_far);
+
+  // Too few near points: the nearest far ones keep their depth up to min_points_with_depth.
+  StereoOptions topped_up = near;
+  topped_up.min_points_with_depth = n_kept + 20;
+  const auto topped = MatchStereo(rig, left, right, frame.left, frame.right, topped_up);
+  int n_topped = 0;
+  double nearest_dropped = 0, farthest_added = 1e9;
+  for (size_t k = 0; k < all.size(); ++k) {
+    if (topped[k]) {
+      ++n_topped;
+      ASSERT_TRUE(all[k].has_value());
+      EXPECT_EQ(topped[k]->u_right, all[k]->u_right);
+      if (!kept[k]) farthest_added = std::min(farthest_added, 1.0 / topped[k]->p_c0.z());
+    } else if (all[k]) {
+      nearest_dropped = std::max(nearest_dropped, 1.0 / all[k]->p_c0.z());
+    }
+  }
+  EXPECT_EQ(n_topped, n_kept + 20);
+  EXPECT_GE(farthest_added, nearest_dropped);  // The added ones are the nearest of the far.
+
   StereoOptions invalid;
-  invalid.max_depth_baselines = 0;
+  invalid.max_depth_baselines = -1;
+  EXPECT_FALSE(invalid.IsValid(nullptr));
+  invalid = StereoOptions();
+  invalid.min_points_with_depth = -1;
   EXPECT_FALSE(invalid.IsValid(nullptr));
 }
 
