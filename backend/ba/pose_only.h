@@ -32,7 +32,8 @@ struct PoseOnlyOptions {
   // inlier at the mono 95% bound is still in the quadratic part.
   double loss_scale = 2.45;
   int max_num_iterations = 10;
-  double max_solver_time_in_seconds = 0.05;
+  // A safety net (a solve takes ~3 ms); hitting it would make the run load-dependent.
+  double max_solver_time_in_seconds = 0.5;
   // Remove observations above the chi-square 95% quantile after a solve, and re-solve
   // (up to max_outlier_rounds times).
   bool remove_outliers = true;

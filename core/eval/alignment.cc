@@ -68,6 +68,18 @@ bool ComputeAlignment(const std::vector<Eigen::Vector3d>& p_e,
     return fail("all estimated positions are identical: no alignment is defined");
   }
   const bool with_scale = type == AlignmentType::kSim3;
+  // A ground truth that does not translate (rotation in place) leaves the Sim(3) scale free:
+  // Umeyama then shrinks the estimate onto the ground truth's single position (scale ~0, ATE
+  // ~0, what evo's umeyama_alignment also returns). That number would read as a perfect
+  // monocular run, so the alignment is refused instead.
+  const Eigen::Vector3d mean_g = dst.rowwise().mean();
+  const double rms_spread_g = std::sqrt((dst.colwise() - mean_g).squaredNorm() / n);
+  if (with_scale && rms_spread_g < 1e-6) {
+    return fail(
+        "sim3 alignment is undefined: the ground-truth positions do not move (rotation in "
+        "place), so a monocular scale cannot be estimated; evaluate with se3 (the estimate's "
+        "translation is then judged at its own scale)");
+  }
   // umeyama returns the 4x4 [c R | t] with dst ~ c R src + t (det R = +1, reflections excluded).
   const Eigen::Matrix4d T = Eigen::umeyama(src, dst, with_scale);
   const Eigen::Matrix3d cR = T.topLeftCorner<3, 3>();

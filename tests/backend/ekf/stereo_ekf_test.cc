@@ -259,7 +259,8 @@ TEST(StereoEkfTest, LostFramesInflateCovarianceAndAreInvalid) {
   EXPECT_LT((est.back().T_w_c.translation() - s.T_w_c_gt.back().translation()).norm(), 0.3);
 }
 
-TEST(StereoEkfTest, ReobservingOldLandmarksClosesTheLoop) {
+// 1.2 turns of a 10 m circle among points 3-10 m away: the camera comes back at frame 125.
+SimOptions CircleLoopOptions() {
   SimOptions o;
   o.path = SimPath::kCircle;
   o.frames = 150;
@@ -271,6 +272,11 @@ TEST(StereoEkfTest, ReobservingOldLandmarksClosesTheLoop) {
   o.sigma_px = 1.0;
   o.motion_sigma_rot = 0.01;
   o.motion_sigma_trans = 0.05;
+  return o;
+}
+
+TEST(StereoEkfTest, ReobservingOldLandmarksClosesTheLoop) {
+  SimOptions o = CircleLoopOptions();
   double ate[2];
   int loops[2] = {0, 0};
   for (int persistent = 0; persistent < 2; ++persistent) {
@@ -301,17 +307,7 @@ TEST(StereoEkfTest, LoopDetectionRelabellingCorrectsTheDrift) {
   int nees_count = 0, loop_updates = 0;
   for (int seed = 0; seed < seeds; ++seed) {
     for (int with_loop = 0; with_loop < 2; ++with_loop) {
-      SimOptions o;
-      o.path = SimPath::kCircle;
-      o.frames = 150;
-      o.turns = 1.2;
-      o.radius = 10.0;
-      o.num_points = 300;
-      o.point_min_depth = 3;
-      o.point_max_depth = 10;
-      o.sigma_px = 1.0;
-      o.motion_sigma_rot = 0.01;
-      o.motion_sigma_trans = 0.05;
+      SimOptions o = CircleLoopOptions();
       o.seed = 300 + seed;
       o.loop_frame = with_loop ? kLoop : -1;
       o.loop_old_frames = 10;

@@ -127,6 +127,19 @@ TEST(Alignment, DegenerateInputsAreAStatus) {
   Trajectory still;
   for (int i = 0; i < 5; ++i) still.Add(i * 100000000LL, Pose::Identity());
   EXPECT_FALSE(Evaluate(still, still, Options(AlignmentType::kSim3)).ok);
+  // Rotation in place: the ground truth stands still, a (mono) estimate wanders a little. Sim(3)
+  // would shrink it onto one point (scale ~0, ATE ~0): refused; SE(3) still judges it.
+  Trajectory wandering;
+  for (int i = 0; i < 5; ++i) {
+    wandering.Add(i * 100000000LL, MakePose(Eigen::Matrix3d::Identity(),
+                                            Eigen::Vector3d(0.01 * i, 0.02 * (i % 2), 0)));
+  }
+  const EvalResult sim3 = Evaluate(still, wandering, Options(AlignmentType::kSim3));
+  EXPECT_FALSE(sim3.ok);
+  EXPECT_NE(sim3.error.find("do not move"), std::string::npos) << sim3.error;
+  const EvalResult se3 = Evaluate(still, wandering, Options(AlignmentType::kSE3));
+  ASSERT_TRUE(se3.ok) << se3.error;
+  EXPECT_GT(se3.ate.translation.rmse, 0.01);
 }
 
 // Per-step drift D: Q_{i+1} = Q_i * G_i * D, so (P_i^-1 P_{i+1})^-1 (Q_i^-1 Q_{i+1}) = D.
