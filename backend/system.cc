@@ -1,8 +1,8 @@
 #include "backend/system.h"
 
-#include <chrono>
-
 #include <glog/logging.h>
+
+#include <chrono>
 
 #include "backend/ekf/mono_ekf.h"
 #include "backend/ekf/stereo_ekf.h"
@@ -27,8 +27,7 @@ std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptio
                 << "' is not supported; available: ba/stereo, ekf/stereo, ekf/mono";
 }
 
-System::System(const StereoRig& rig, const SystemOptions& options)
-    : rig_(rig), options_(options) {
+System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), options_(options) {
   std::string why;
   if (!options_.IsValid(&why)) throw Error() << "invalid options: " << why;
   if (!rig_.left.IsValid(&why)) throw Error() << "invalid calibration: " << why;
@@ -73,8 +72,7 @@ TrackResult System::Track(const Frame& frame) {
 }
 
 void System::RecordKeyframe() {
-  KeyframeRecord record;
-  record.trajectory_index = stats_.size() - 1;
+  SavedKeyframe record;
   const DetectedImage* detection = frontend_->keyframe_detection();
   const std::vector<LandmarkId>* landmarks = frontend_->keyframe_landmarks();
   if (detection != nullptr && landmarks != nullptr) {
@@ -93,34 +91,59 @@ void System::RecordKeyframe() {
     }
   }
   keyframe_records_.push_back(std::move(record));
+  keyframe_trajectory_index_.push_back(stats_.size() - 1);
+}
+
+void System::RefreshKeyframePoses() const {
+  const Trajectory trajectory = estimator_->trajectory();
+  for (size_t k = 0; k < keyframe_records_.size(); ++k) {
+    const size_t index = keyframe_trajectory_index_[k];
+    CHECK_LT(index, trajectory.poses.size());
+    keyframe_records_[k].frame = stats_[index].frame;
+    keyframe_records_[k].t_ns = trajectory.poses[index].t_ns;
+    keyframe_records_[k].T_w_c = trajectory.poses[index].T_w_c;
+  }
 }
 
 std::vector<SavedKeyframe> System::keyframes() const {
-  const Trajectory trajectory = estimator_->trajectory();
-  std::vector<SavedKeyframe> out;
-  for (const KeyframeRecord& record : keyframe_records_) {
-    CHECK_LT(record.trajectory_index, trajectory.poses.size());
-    SavedKeyframe info;
-    info.frame = stats_[record.trajectory_index].frame;
-    info.t_ns = trajectory.poses[record.trajectory_index].t_ns;
-    info.T_w_c = trajectory.poses[record.trajectory_index].T_w_c;
-    info.points = record.points;
-    out.push_back(std::move(info));
-  }
-  return out;
+  RefreshKeyframePoses();
+  return keyframe_records_;
 }
 
-SavedMap System::MapSnapshot() const {
+namespace {
+
+// The map without its keyframes: landmarks and the descriptor size.
+SavedMap MapWithoutKeyframes(const std::vector<SavedKeyframe>& keyframes,
+                             const std::vector<MapPoint>& points) {
   SavedMap map;
-  map.keyframes = keyframes();
-  for (const SavedKeyframe& kf : map.keyframes) {
+  for (const SavedKeyframe& kf : keyframes) {
     if (!kf.points.empty()) map.descriptor_size = static_cast<int>(kf.points[0].descriptor.size());
   }
-  for (const MapPoint& p : estimator_->map()) map.landmarks.push_back({p.id, p.p_w, p.observations});
+  for (const MapPoint& p : points) map.landmarks.push_back({p.id, p.p_w, p.observations});
   return map;
 }
 
-void System::SaveMap(const std::string& path) const { WriteMapFile(path, MapSnapshot()); }
+}  // namespace
+
+SavedMap System::MapSnapshot() const {
+  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map());
+  map.keyframes = keyframes();
+  return map;
+}
+
+void System::SaveMap(const std::string& path) const {
+  RefreshKeyframePoses();
+  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map());
+  // Lend the records to the writer (moved back even when writing throws).
+  map.keyframes = std::move(keyframe_records_);
+  try {
+    WriteMapFile(path, map);
+  } catch (...) {
+    keyframe_records_ = std::move(map.keyframes);
+    throw;
+  }
+  keyframe_records_ = std::move(map.keyframes);
+}
 
 SavedMap System::LoadMap(const std::string& path) { return ReadMapFile(path); }
 

@@ -1,13 +1,13 @@
 #include "core/io/map_file.h"
 
+#include <glog/logging.h>
+
+#include <Eigen/Geometry>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 #include <type_traits>
-
-#include <Eigen/Geometry>
-#include <glog/logging.h>
 
 #include "core/error.h"
 #include "core/io/atomic_file.h"
@@ -25,29 +25,38 @@ bool HostIsLittleEndian() {
   return first == 1;
 }
 
-uint64_t Fnv1a(const std::string& bytes) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 0x100000001b3ull;
+constexpr uint64_t kFnvOffset = 0xcbf29ce484222325ull;
+constexpr uint64_t kFnvPrime = 0x100000001b3ull;
+
+uint64_t Fnv1a(const char* data, size_t n, uint64_t h = kFnvOffset) {
+  for (size_t i = 0; i < n; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= kFnvPrime;
   }
   return h;
 }
 
+// Streams the body to `os` and hashes it on the way: a map is written without a second copy
+// of it in memory (a 1000-keyframe map is ~0.5 GB of descriptors).
 class Writer {
  public:
+  explicit Writer(std::ostream* os) : os_(os) {}
   template <typename T>
   void Put(T value) {
     static_assert(std::is_trivially_copyable_v<T>);
     char raw[sizeof(T)];
     std::memcpy(raw, &value, sizeof(T));
-    bytes_.append(raw, sizeof(T));
+    PutRaw(raw, sizeof(T));
   }
-  void PutRaw(const char* data, size_t n) { bytes_.append(data, n); }
-  const std::string& bytes() const { return bytes_; }
+  void PutRaw(const char* data, size_t n) {
+    hash_ = Fnv1a(data, n, hash_);
+    os_->write(data, static_cast<std::streamsize>(n));
+  }
+  uint64_t hash() const { return hash_; }
 
  private:
-  std::string bytes_;
+  std::ostream* os_;
+  uint64_t hash_ = kFnvOffset;
 };
 
 // Reads the body (everything but the trailing hash) with bounds checks.
@@ -106,16 +115,7 @@ Pose GetPose(Reader* r) {
 void WriteMapFile(const std::string& path, const SavedMap& map) {
   CHECK(HostIsLittleEndian()) << "dala map files are little-endian";
   if (map.descriptor_size < 0) throw Error() << path << ": negative descriptor size";
-  Writer w;
-  w.PutRaw(kMagic, sizeof(kMagic));
-  w.Put<uint32_t>(MapFileVersion::kCurrent);
-  w.Put<uint32_t>(static_cast<uint32_t>(map.descriptor_size));
-  w.Put<uint64_t>(map.keyframes.size());
   for (const SavedKeyframe& kf : map.keyframes) {
-    w.Put<int64_t>(kf.frame.value);
-    w.Put<int64_t>(kf.t_ns);
-    PutPose(kf.T_w_c, &w);
-    w.Put<uint64_t>(kf.points.size());
     for (const SavedKeyframePoint& p : kf.points) {
       const bool has = !p.descriptor.empty();
       if ((has && static_cast<int>(p.descriptor.size()) != map.descriptor_size) ||
@@ -124,23 +124,36 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
                       << p.descriptor.size() << " descriptor values, the map declares "
                       << map.descriptor_size;
       }
-      w.Put<int64_t>(p.landmark.value);
-      w.Put(p.uv.x());
-      w.Put(p.uv.y());
-      w.Put(p.orientation);
-      w.Put(p.scale);
-      for (float d : p.descriptor) w.Put(d);
     }
   }
-  w.Put<uint64_t>(map.landmarks.size());
-  for (const SavedLandmark& l : map.landmarks) {
-    w.Put<int64_t>(l.id.value);
-    for (int i = 0; i < 3; ++i) w.Put(l.p_w[i]);
-    w.Put<int32_t>(l.observations);
-  }
-  const uint64_t hash = Fnv1a(w.bytes());
   WriteFileAtomically(path, [&](std::ostream& os) {
-    os.write(w.bytes().data(), static_cast<std::streamsize>(w.bytes().size()));
+    Writer w(&os);
+    w.PutRaw(kMagic, sizeof(kMagic));
+    w.Put<uint32_t>(MapFileVersion::kCurrent);
+    w.Put<uint32_t>(static_cast<uint32_t>(map.descriptor_size));
+    w.Put<uint64_t>(map.keyframes.size());
+    for (const SavedKeyframe& kf : map.keyframes) {
+      w.Put<int64_t>(kf.frame.value);
+      w.Put<int64_t>(kf.t_ns);
+      PutPose(kf.T_w_c, &w);
+      w.Put<uint64_t>(kf.points.size());
+      for (const SavedKeyframePoint& p : kf.points) {
+        w.Put<int64_t>(p.landmark.value);
+        w.Put(p.uv.x());
+        w.Put(p.uv.y());
+        w.Put(p.orientation);
+        w.Put(p.scale);
+        w.PutRaw(reinterpret_cast<const char*>(p.descriptor.data()),
+                 p.descriptor.size() * sizeof(float));
+      }
+    }
+    w.Put<uint64_t>(map.landmarks.size());
+    for (const SavedLandmark& l : map.landmarks) {
+      w.Put<int64_t>(l.id.value);
+      for (int i = 0; i < 3; ++i) w.Put(l.p_w[i]);
+      w.Put<int32_t>(l.observations);
+    }
+    const uint64_t hash = w.hash();
     os.write(reinterpret_cast<const char*>(&hash), sizeof(hash));
   });
 }
@@ -166,7 +179,7 @@ SavedMap ReadMapFile(const std::string& path) {
   const size_t body = bytes.size() - sizeof(uint64_t);
   uint64_t stored_hash;
   std::memcpy(&stored_hash, bytes.data() + body, sizeof(stored_hash));
-  if (Fnv1a(bytes.substr(0, body)) != stored_hash) {
+  if (Fnv1a(bytes.data(), body) != stored_hash) {
     throw Error() << path << ": corrupted or truncated map file (hash mismatch); write it again "
                   << "with SaveMap";
   }
