@@ -14,13 +14,17 @@
 namespace dala {
 namespace {
 
-TEST(Stereo, DepthMatchesRenderedGroundTruth) {
+// The rendered rover loop (seed 4, default image noise of 1 grey level).
+sim::SimOptions RoverOptions(int frames) {
   sim::SimOptions options;
   options.preset = "rover_loop";
-  options.frames = 30;
+  options.frames = frames;
   options.seed = 4;
-  options.noise_sigma = 1.0;
-  const sim::SyntheticSequence seq(options);
+  return options;
+}
+
+TEST(Stereo, DepthMatchesRenderedGroundTruth) {
+  const sim::SyntheticSequence seq(RoverOptions(30));
   const StereoRig rig = seq.rig();
   int matched = 0, good = 0, wrong = 0;
   std::vector<double> rel_errors;
@@ -62,24 +66,13 @@ TEST(Stereo, DepthMatchesRenderedGroundTruth) {
   EXPECT_GT(static_cast<double>(good) / rel_errors.size(), 0.9);
 }
 
-}  // namespace
-}  // namespace dala
-
-namespace dala {
-namespace {
-
 // Signed disparity bias against the rendered depth. A systematic disparity error delta biases
 // every depth by delta / d relative, i.e. the metric scale of the trajectory (0.1 px at 10 px of
 // disparity is 1 %): the median absolute error above cannot see it, the signed mean can.
 // Only points on smooth depth (the 5x5 neighbourhood within 2 %) count, with the true
 // disparity fx b / z from the bilinearly interpolated inverse depth at the sub-pixel point.
 TEST(Stereo, DisparityHasNoSignedBias) {
-  sim::SimOptions options;
-  options.preset = "rover_loop";
-  options.frames = 30;
-  options.seed = 4;
-  options.noise_sigma = 1.0;
-  const sim::SyntheticSequence seq(options);
+  const sim::SyntheticSequence seq(RoverOptions(30));
   const StereoRig rig = seq.rig();
   const double fb = rig.left.fx * rig.baseline;
   StereoOptions stereo_options;
@@ -140,11 +133,7 @@ TEST(Stereo, DisparityHasNoSignedBias) {
 
 // Far points are matched but returned without depth (the close/far limit of stereo.h).
 TEST(Stereo, DepthIsKeptOnlyUpToTheBaselineLimit) {
-  sim::SimOptions options;
-  options.preset = "rover_loop";
-  options.frames = 10;
-  options.seed = 4;
-  const sim::SyntheticSequence seq(options);
+  const sim::SyntheticSequence seq(RoverOptions(10));
   const StereoRig rig = seq.rig();
   const Frame frame = seq.Render(0);
   const HarrisOptions harris = SequenceHarrisOptions();
