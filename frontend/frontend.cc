@@ -99,14 +99,19 @@ std::vector<Match> Frontend::MatchTemporal(const TrackedFrame& from, const Detec
   return MatchPoints(from.detection, cur, options_.tracking_matcher, &prior);
 }
 
-std::optional<MotionEstimate> Frontend::TrackFromPrevious(TrackedFrame* cur) {
+std::optional<MotionEstimate> Frontend::TrackFromPrevious(
+    TrackedFrame* cur, std::optional<std::vector<Match>> predicted_matches) {
   const TrackedFrame& prev = *prev_;
   const Pose prediction = velocity_T_prev_cur_;
   std::optional<MotionResult> motion;
   std::vector<Match> matches;
   std::vector<int> corr_match;  // Correspondence -> index in matches.
   for (int attempt = 0; attempt < 2 && !motion; ++attempt) {
-    matches = MatchTemporal(prev, cur->detection, attempt == 0 ? &prediction : nullptr);
+    if (attempt == 0 && predicted_matches) {
+      matches = std::move(*predicted_matches);
+    } else {
+      matches = MatchTemporal(prev, cur->detection, attempt == 0 ? &prediction : nullptr);
+    }
     corr_match.clear();
     if (rig_.is_stereo()) {
       std::vector<MotionCorrespondence> corrs;
@@ -186,9 +191,9 @@ void Frontend::ReacquireFromKeyframe(TrackedFrame* cur) const {
 }
 
 std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame, TrackedFrame* cur) {
-  KeyframeEntry entry = place_recognition_.MakeEntry(frame.id, frame.t_ns, cur->T_w_c,
-                                                     path_length_m_, frame.left, cur->detection,
-                                                     cur->stereo, cur->landmark);
+  KeyframeEntry entry =
+      place_recognition_.MakeEntry(frame.id, frame.t_ns, cur->T_w_c, path_length_m_, frame.left,
+                                   cur->detection, cur->stereo, cur->landmark);
   std::optional<PlaceMatch> match =
       place_recognition_.Detect(entry, cur->detection, cur->stereo, cur->landmark);
   if (match) {
@@ -236,19 +241,28 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   cur.track_length.assign(n, 1);
   out.timings.detect_ms = MsSince(t_start);
 
-  // 2. Stereo.
+  // 2. Stereo, and on the worker the temporal matches of the first tracking attempt (predicted
+  // by the constant velocity): both only read the detections, so they run side by side, with
+  // the same result as one after the other. stereo_ms is then the time of both.
   auto t0 = Clock::now();
   cur.stereo.assign(n, std::nullopt);
+  std::optional<std::vector<Match>> predicted_matches;
+  const bool overlap = stereo && prev_ && options_.parallel_detection;
+  if (overlap) {
+    detection_worker_.Start(
+        [&] { predicted_matches = MatchTemporal(*prev_, cur.detection, &velocity_T_prev_cur_); });
+  }
   if (stereo) {
     cur.stereo = MatchStereo(rig_, cur.detection, right, frame.left, frame.right, options_.stereo);
   }
+  if (overlap) detection_worker_.Wait();
   out.timings.stereo_ms = MsSince(t0);
 
   // 3. Tracking and motion.
   t0 = Clock::now();
   std::optional<MotionEstimate> motion;
   if (prev_) {
-    motion = TrackFromPrevious(&cur);
+    motion = TrackFromPrevious(&cur, std::move(predicted_matches));
     if (motion) {
       velocity_T_prev_cur_ = motion->T_prev_cur;
       if (!motion->scale_known) {

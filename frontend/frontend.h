@@ -65,7 +65,9 @@ struct FrontendOptions {
   bool match_keyframe = true;
   // Reprojection gate for keyframe re-acquisitions (pixels).
   double keyframe_gate_px = 3.0;
-  // Detect the right image in a second thread (does not change the result).
+  // Use a second thread: the right image is detected, and the temporal matches of the first
+  // tracking attempt are made, beside the left detection and the stereo matching (does not
+  // change the result).
   bool parallel_detection = true;
   // Loop detection at keyframes (stereo): place recognition + relabelling of the recognised
   // landmarks with their old ids (frontend/place_recognition.h).
@@ -117,7 +119,9 @@ class Frontend {
   std::vector<Match> MatchTemporal(const TrackedFrame& from, const DetectedImage& cur,
                                    const Pose* T_from_cur) const;
   // Inherits ids from `prev` through the motion inliers; returns the motion, if any.
-  std::optional<MotionEstimate> TrackFromPrevious(TrackedFrame* cur);
+  // `predicted_matches`: the first attempt's MatchTemporal result when already computed.
+  std::optional<MotionEstimate> TrackFromPrevious(
+      TrackedFrame* cur, std::optional<std::vector<Match>> predicted_matches = std::nullopt);
   void ReacquireFromKeyframe(TrackedFrame* cur) const;
   // At a keyframe: searches the database, relabels the recognised points, adds the keyframe.
   std::optional<LoopDetection> DetectLoop(const Frame& frame, TrackedFrame* cur);

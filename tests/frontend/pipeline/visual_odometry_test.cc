@@ -46,13 +46,46 @@ TEST(VisualOdometry, RoverLoopDriftIsSmall) {
   EvalOptions eval;
   const EvalResult result = Evaluate(seq.ground_truth(), run.estimate, eval);
   ASSERT_TRUE(result.ok) << result.error;
-  std::cout << "[ measured ] frames " << seq.size() << " path " << seq.PathLength()
-            << " m, lost " << run.lost << ", keyframes " << run.keyframes << ", tracked/frame "
-            << run.mean_tracked << "\n"
+  std::cout << "[ measured ] frames " << seq.size() << " path " << seq.PathLength() << " m, lost "
+            << run.lost << ", keyframes " << run.keyframes << ", tracked/frame " << run.mean_tracked
+            << "\n"
             << EvalResultToTable(result) << std::endl;
   EXPECT_EQ(run.lost, 0);
   ASSERT_TRUE(result.has_kitti);
   EXPECT_LT(result.kitti.t_err_percent, 2.0);
+}
+
+// The second thread (right detection, first temporal matching beside the stereo matching) must
+// not change anything: every measurement equal, bit for bit, with and without it.
+TEST(VisualOdometry, SecondThreadDoesNotChangeTheMeasurements) {
+  sim::SimOptions options;
+  options.preset = "rover_loop";
+  options.frames = 12;
+  options.seed = 5;
+  const sim::SyntheticSequence seq(options);
+  FrontendOptions threaded, single;
+  threaded.parallel_detection = true;
+  single.parallel_detection = false;
+  Frontend a(seq.rig(), threaded), b(seq.rig(), single);
+  for (size_t i = 0; i < seq.size(); ++i) {
+    const Frame frame = seq.Render(i);
+    const FrameMeasurement ma = a.Process(frame), mb = b.Process(frame);
+    ASSERT_EQ(ma.status, mb.status) << "frame " << i;
+    ASSERT_EQ(ma.is_keyframe, mb.is_keyframe) << "frame " << i;
+    ASSERT_EQ(ma.motion.has_value(), mb.motion.has_value()) << "frame " << i;
+    if (ma.motion) {
+      EXPECT_EQ(ma.motion->T_prev_cur.matrix(), mb.motion->T_prev_cur.matrix()) << "frame " << i;
+      EXPECT_EQ(ma.motion->inliers, mb.motion->inliers) << "frame " << i;
+    }
+    ASSERT_EQ(ma.observations.size(), mb.observations.size()) << "frame " << i;
+    for (size_t k = 0; k < ma.observations.size(); ++k) {
+      const FeatureObservation &oa = ma.observations[k], &ob = mb.observations[k];
+      EXPECT_EQ(oa.landmark, ob.landmark);
+      EXPECT_EQ(oa.uv, ob.uv);
+      EXPECT_EQ(oa.u_right, ob.u_right);
+      EXPECT_EQ(oa.track_length, ob.track_length);
+    }
+  }
 }
 
 }  // namespace
