@@ -235,6 +235,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     kf.observations = SelectKeyframeObservations(m, T_w_c);
     ba_.AddKeyframe(kf);
     const SlidingWindowBa::Summary summary = ba_.Optimize();
+    VLOG(2) << "keyframe " << kf.id << ": " << summary.BriefReport();
     if (summary.usable) out.valid = true;
     for (const auto& [id, p_w] : ba_.Landmarks()) map_points_[id] = p_w;
     // Every keyframe's latest estimate (window ones move, the others keep their exit value).

@@ -1,8 +1,76 @@
 #include "backend/ba/reprojection_factors.h"
 
+#include <ceres/manifold.h>
 #include <glog/logging.h>
 
+#include <Eigen/Geometry>
+
+#include "core/geometry.h"
+
 namespace dala {
+
+namespace {
+
+// The rows of J_c = dr/dp_c (whitened), see the header.
+template <int kRows>
+Eigen::Matrix<double, kRows, 3> CameraJacobian(const StereoIntrinsics& K, const Eigen::Vector3d& p_c,
+                                               double inv_sigma) {
+  const double iz = 1.0 / p_c.z();
+  const double a = K.fx * iz * inv_sigma;
+  const double b = K.fy * iz * inv_sigma;
+  Eigen::Matrix<double, kRows, 3> J;
+  J.template topRows<2>() << a, 0.0, -a * p_c.x() * iz,  //
+      0.0, b, -b * p_c.y() * iz;
+  if constexpr (kRows == 3) J.row(2) << a, 0.0, -a * (p_c.x() - K.baseline) * iz;
+  return J;
+}
+
+}  // namespace
+
+template <int kRows>
+ReprojectionCost<kRows>::ReprojectionCost(const StereoIntrinsics& K,
+                                          const Eigen::Matrix<double, kRows, 1>& uvr_meas,
+                                          double sigma_px)
+    : K_(K), uvr_meas_(uvr_meas), inv_sigma_(1.0 / sigma_px) {
+  CHECK_GT(sigma_px, 0.0);
+}
+
+template <int kRows>
+bool ReprojectionCost<kRows>::Evaluate(double const* const* parameters, double* residuals,
+                                       double** jacobians) const {
+  const double* x = parameters[0];
+  const Eigen::Map<const Eigen::Vector3d> p_w(parameters[1]);
+  const Eigen::Matrix3d R_w_c =
+      Eigen::Quaterniond(x[3], x[0], x[1], x[2]).normalized().toRotationMatrix();
+  const Eigen::Vector3d d = p_w - Eigen::Map<const Eigen::Vector3d>(x + 4);
+  const Eigen::Vector3d p_c = R_w_c.transpose() * d;
+  const double iz = 1.0 / p_c.z();
+  Eigen::Map<Eigen::Matrix<double, kRows, 1>> r(residuals);
+  r[0] = K_.fx * p_c.x() * iz + K_.cx;
+  r[1] = K_.fy * p_c.y() * iz + K_.cy;
+  if constexpr (kRows == 3) r[2] = r[0] - K_.fx * K_.baseline * iz;
+  r = (r - uvr_meas_) * inv_sigma_;
+  if (jacobians == nullptr) return true;
+
+  const Eigen::Matrix<double, kRows, 3> J_w =
+      CameraJacobian<kRows>(K_, p_c, inv_sigma_) * R_w_c.transpose();  // dr/dp_w
+  if (jacobians[0] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, kRows, 7, Eigen::RowMajor>> J_x(jacobians[0]);
+    static const ceres::EigenQuaternionManifold kQuaternion;
+    Eigen::Matrix<double, 4, 3, Eigen::RowMajor> P;
+    kQuaternion.PlusJacobian(x, P.data());
+    J_x.template leftCols<4>() = (2.0 * J_w * Skew(d)) * P.transpose();  // (dr/da) P^T
+    J_x.template rightCols<3>() = -J_w;
+  }
+  if (jacobians[1] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, kRows, 3, Eigen::RowMajor>> J_p(jacobians[1]);
+    J_p = J_w;
+  }
+  return true;
+}
+
+template class ReprojectionCost<2>;
+template class ReprojectionCost<3>;
 
 int ResidualDof(const StereoIntrinsics& K, const BaObservation& obs) {
   return (obs.is_stereo() && K.is_stereo()) ? 3 : 2;
@@ -11,21 +79,33 @@ int ResidualDof(const StereoIntrinsics& K, const BaObservation& obs) {
 ceres::CostFunction* CreateReprojectionCost(const StereoIntrinsics& K, const BaObservation& obs) {
   CHECK_GT(obs.sigma_px, 0.0) << "observation of landmark " << obs.landmark << " has sigma <= 0";
   if (ResidualDof(K, obs) == 3) {
-    return StereoReprojectionError::Create(K, obs.uv, *obs.u_right, obs.sigma_px);
+    return new ReprojectionCost<3>(K, Eigen::Vector3d(obs.uv.x(), obs.uv.y(), *obs.u_right),
+                                   obs.sigma_px);
   }
-  return MonoReprojectionError::Create(K, obs.uv, obs.sigma_px);
+  return new ReprojectionCost<2>(K, obs.uv, obs.sigma_px);
 }
 
 double WhitenedSquaredError(const StereoIntrinsics& K, const BaObservation& obs, const double* x,
                             const double* p_w, double* depth) {
-  double r[3] = {0.0, 0.0, 0.0};
+  const double* parameters[2] = {x, p_w};
+  double e2 = 0.0;
   if (ResidualDof(K, obs) == 3) {
-    StereoReprojectionError(K, obs.uv, *obs.u_right, obs.sigma_px)(x, p_w, r);
+    Eigen::Vector3d r;
+    ReprojectionCost<3>(K, Eigen::Vector3d(obs.uv.x(), obs.uv.y(), *obs.u_right), obs.sigma_px)
+        .Evaluate(parameters, r.data(), nullptr);
+    e2 = r.squaredNorm();
   } else {
-    MonoReprojectionError(K, obs.uv, obs.sigma_px)(x, p_w, r);
+    Eigen::Vector2d r;
+    ReprojectionCost<2>(K, obs.uv, obs.sigma_px).Evaluate(parameters, r.data(), nullptr);
+    e2 = r.squaredNorm();
   }
-  if (depth) *depth = WorldToCamera(x, p_w).z();
-  return r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+  if (depth) {
+    const Eigen::Quaterniond q_w_c(x[3], x[0], x[1], x[2]);
+    *depth = (q_w_c.normalized().conjugate() *
+              (Eigen::Map<const Eigen::Vector3d>(p_w) - Eigen::Map<const Eigen::Vector3d>(x + 4)))
+                 .z();
+  }
+  return e2;
 }
 
 }  // namespace dala

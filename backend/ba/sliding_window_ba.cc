@@ -306,6 +306,7 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
     solver_options.logging_type = ceres::SILENT;
     ceres::Solver::Summary ceres_summary;
     ceres::Solve(solver_options, &problem, &ceres_summary);
+    VLOG(3) << ceres_summary.FullReport();
     ++summary.num_solves;
     summary.num_iterations += static_cast<int>(ceres_summary.iterations.size());
     if (round == 0) summary.initial_cost = ceres_summary.initial_cost;
