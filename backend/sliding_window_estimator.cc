@@ -204,7 +204,21 @@ Pose SlidingWindowEstimator::KeyframePoseNow(KeyframeId id) const {
   return it->second;
 }
 
+void SlidingWindowEstimator::SolveWindow(KeyframeId id) {
+  const SlidingWindowBa::Summary summary = ba_.Optimize();
+  VLOG(2) << "keyframe " << id << ": " << summary.BriefReport();
+  if (!summary.usable) LOG(WARNING) << "keyframe " << id << ": window solve not usable";
+  for (const auto& [landmark, p_w] : ba_.Landmarks()) map_points_[landmark] = p_w;
+  // Every keyframe's latest estimate (window ones move, the others keep their exit value).
+  for (const KeyframeId k : ba_.WindowKeyframes()) keyframe_poses_[k] = *ba_.KeyframePose(k);
+}
+
 EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
+  WaitForWindowSolve();
+  if (solved_in_background_) {
+    T_w_prev_ = keyframe_poses_.at(*solved_in_background_);
+    solved_in_background_.reset();
+  }
   EstimatorOutput out;
   // Initial guess: the previous estimate moved by the visual motion (or the last velocity).
   const bool first = frames_.empty();
@@ -226,7 +240,10 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     if (!first) {
       // Refine the guess against the window before the keyframe joins it.
       const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(m), T_w_c, options_.pose_only);
-      if (r.status == PoseOnlyStatus::kOk) T_w_c = r.T_w_c;
+      if (r.status == PoseOnlyStatus::kOk) {
+        T_w_c = r.T_w_c;
+        out.valid = true;
+      }
     }
     BaKeyframe kf;
     kf.id = KeyframeId(num_keyframes_++);
@@ -234,27 +251,29 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     kf.T_w_c = T_w_c;
     kf.observations = SelectKeyframeObservations(m, T_w_c);
     ba_.AddKeyframe(kf);
-    const SlidingWindowBa::Summary summary = ba_.Optimize();
-    VLOG(2) << "keyframe " << kf.id << ": " << summary.BriefReport();
-    if (summary.usable) out.valid = true;
-    for (const auto& [id, p_w] : ba_.Landmarks()) map_points_[id] = p_w;
-    // Every keyframe's latest estimate (window ones move, the others keep their exit value).
-    for (const KeyframeId id : ba_.WindowKeyframes()) keyframe_poses_[id] = *ba_.KeyframePose(id);
-    keyframe_poses_[kf.id] = KeyframePoseNow(kf.id);
-    T_w_c = keyframe_poses_[kf.id];
+    keyframe_poses_[kf.id] = T_w_c;
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});
     keyframe_of_frame_[m.frame] = kf.id;
+    out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
+    if (options_.background_solve) {
+      solved_in_background_ = kf.id;
+      solver_.Start([this, id = kf.id] { SolveWindow(id); });
+    } else {
+      SolveWindow(kf.id);
+      T_w_c = keyframe_poses_.at(kf.id);
+    }
   } else {
     const KeyframeId ref(num_keyframes_ - 1);
     frames_.push_back({m.t_ns, ref, KeyframePoseNow(ref).inverse() * T_w_c});
+    out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
   }
   T_w_prev_ = T_w_c;
   out.T_w_c = T_w_c;
-  out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
   return out;
 }
 
 Trajectory SlidingWindowEstimator::trajectory() const {
+  WaitForWindowSolve();
   Trajectory t;
   t.poses.reserve(frames_.size());
   for (const FrameRecord& f : frames_) t.Add(f.t_ns, KeyframePoseNow(f.reference) * f.T_kf_c);
@@ -262,6 +281,7 @@ Trajectory SlidingWindowEstimator::trajectory() const {
 }
 
 std::vector<MapPoint> SlidingWindowEstimator::map() const {
+  WaitForWindowSolve();
   std::vector<MapPoint> points;
   for (const auto& [id, p_w] : map_points_) {
     MapPoint p;

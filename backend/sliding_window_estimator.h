@@ -18,6 +18,15 @@
 // into the initial guess of each frame; when the pose-only optimisation fails the guess is kept
 // (the frame is then reported invalid).
 //
+// Background window solve (options.background_solve, default on): a keyframe's window
+// optimisation runs on a worker thread while the caller goes on with the next frame's frontend,
+// and the next Add (or any accessor) waits for it first. The result does not depend on timing:
+// the solve always ends before the next frame's pose-only tracking, which uses its landmarks,
+// and that frame's initial guess starts from the solved keyframe pose. What changes is what Add
+// returns for a keyframe: its pose-only estimate before the window solve (the trajectory()
+// accessor gives the solved one), and `valid` from the pose-only tracking instead of the solve.
+// The frontend never reads the estimator, so the two overlap safely.
+//
 // Loop closure (a keyframe measurement with `loop`, options.loop.enable): before the keyframe
 // joins the window, an SE(3) pose graph over ALL keyframes (backend/ba/pose_graph.h, gauge: the
 // first keyframe) is solved with
@@ -35,6 +44,7 @@
 // ids) then join the window at the moved positions.
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +52,7 @@
 #include "backend/ba/sliding_window_ba.h"
 #include "backend/estimator.h"
 #include "core/camera.h"
+#include "frontend/worker_thread.h"
 
 namespace dala {
 
@@ -80,6 +91,7 @@ struct SlidingWindowEstimatorOptions {
   // Landmarks farther than this (camera frame) are not added: weak constraints on translation.
   double max_landmark_depth_m = 60.0;
   BaLoopClosureOptions loop;
+  bool background_solve = true;  // see the class comment.
 
   bool IsValid(std::string* why) const;
 };
@@ -95,7 +107,10 @@ class SlidingWindowEstimator : public Estimator {
   Trajectory trajectory() const override;
   std::vector<MapPoint> map() const override;
 
-  const SlidingWindowBa& ba() const { return ba_; }
+  const SlidingWindowBa& ba() const {
+    WaitForWindowSolve();
+    return ba_;
+  }
   int num_keyframes() const { return num_keyframes_; }
   int num_loops_closed() const { return static_cast<int>(loop_edges_.size()); }
 
@@ -113,6 +128,11 @@ class SlidingWindowEstimator : public Estimator {
   // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame
   // is not a keyframe or the solve fails.
   bool CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
+  // Optimises the window with the new keyframe `id` and records the new estimates
+  // (keyframe_poses_, map_points_). Runs on solver_ when options_.background_solve.
+  void SolveWindow(KeyframeId id);
+  // Blocks until a background window solve has finished (no-op when none is running).
+  void WaitForWindowSolve() const { solver_.Wait(); }
 
   StereoRig rig_;
   SlidingWindowEstimatorOptions options_;
@@ -127,6 +147,11 @@ class SlidingWindowEstimator : public Estimator {
   Pose T_w_prev_ = Pose::Identity();
   Pose velocity_ = Pose::Identity();
   int num_keyframes_ = 0;
+  // The keyframe whose window solve ran in the background since the last Add (its solved pose
+  // becomes the next frame's starting point).
+  std::optional<KeyframeId> solved_in_background_;
+  // Declared last: destroyed (its thread joined, any solve finished) before the state it uses.
+  mutable WorkerThread solver_;
 };
 
 }  // namespace dala

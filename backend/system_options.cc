@@ -120,6 +120,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "min_observations", &b.ba.min_observations);
   v->Field("ba", "max_new_landmarks_per_keyframe", &b.max_new_landmarks_per_keyframe);
   v->Field("ba", "max_landmark_depth_m", &b.max_landmark_depth_m);
+  v->Field("ba", "background_solve", &b.background_solve);
   StereoEkfOptions& es = o->ekf_stereo;
   v->Field("ekf_stereo", "max_landmarks", &es.max_landmarks);
   v->Field("ekf_stereo", "grid_cols", &es.grid_cols);

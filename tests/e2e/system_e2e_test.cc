@@ -52,6 +52,28 @@ TEST(SystemE2e, RoverStretchStereoBa) {
   EXPECT_LT(fraction, 0.005);
 }
 
+// The window solve in the background (default) and in the caller's thread give the same
+// trajectory, bit for bit: the overlap with the next frame's frontend must not change results.
+TEST(SystemE2e, BackgroundWindowSolveGivesTheSameTrajectory) {
+  sim::SimOptions sim;
+  sim.preset = "rover_loop";
+  sim.frames = 60;
+  sim.seed = 5;
+  const sim::SyntheticSequence seq(sim);
+  SystemOptions foreground;
+  foreground.ba.background_solve = false;
+  SystemOptions background;
+  ASSERT_TRUE(background.ba.background_solve);
+  const SystemRun a = RunSystem(seq, foreground);
+  const SystemRun b = RunSystem(seq, background);
+  ASSERT_EQ(a.trajectory.size(), seq.size());
+  ASSERT_EQ(b.trajectory.size(), seq.size());
+  for (size_t i = 0; i < seq.size(); ++i) {
+    EXPECT_EQ(a.trajectory.poses[i].T_w_c.matrix(), b.trajectory.poses[i].T_w_c.matrix())
+        << "frame " << i;
+  }
+}
+
 // The paper's filters on the same measurements: stereo EKF, and the bearing-only mono EKF whose
 // scale comes from the stereo visual motion (dead reckoning, as on the paper's robots).
 TEST(SystemE2e, RoverStretchEkfStereoAndMono) {
