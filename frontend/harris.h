@@ -26,9 +26,12 @@
 // the pool its pyramid images are recycled from are per thread).
 
 #include <Eigen/Core>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
+
+#include "frontend/neighbour_cache.h"
 
 namespace dala {
 
@@ -82,6 +85,8 @@ struct DetectedImage {
   cv::Size image_size;
   int patch_size = 11;
   double patch_spacing = 1.5;
+  // The matcher's k-nearest-neighbour lists of `points`, computed on first use (neighbour_cache.h).
+  std::shared_ptr<NeighbourCache> neighbour_cache = std::make_shared<NeighbourCache>();
 };
 
 // Detects interest points on an 8-bit grey image (CV_8UC1). CHECK-fails on invalid options or an

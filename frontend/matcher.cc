@@ -140,13 +140,9 @@ class Matcher {
     for (size_t i = 0; i < na_; ++i) uv_a[i] = a_.points[i].uv;
     for (size_t j = 0; j < nb_; ++j) uv_b[j] = b_.points[j].uv;
     const double cell = 24.0;
-    grid_a_ = std::make_unique<SpatialGrid>(uv_a, cell);
     grid_b_ = std::make_unique<SpatialGrid>(uv_b, cell);
     FindCandidates();
-    neighbours_.assign(na_, {});
-    for (size_t i = 0; i < na_; ++i) {
-      neighbours_[i] = grid_a_->Nearest(static_cast<int>(i), o_.num_neighbours);
-    }
+    neighbour_lists_ = CachedNearestNeighbours(uv_a, o_.num_neighbours, a_.neighbour_cache.get());
     std::vector<GroupMatch> confirmed = Confirm();
     SelectOneToOne(&confirmed);
     const int num_confirmed = static_cast<int>(confirmed.size());
@@ -294,7 +290,7 @@ class Matcher {
       double dphi, log_s;
     };
     std::vector<Vote> votes;
-    for (int n : neighbours_[i]) {
+    for (int n : (*neighbour_lists_)[i]) {
       const Eigen::Vector2d d_a = a_.points[n].uv - p.uv;
       const double len2_a = d_a.squaredNorm();
       if (len2_a < 1.0) continue;
@@ -396,7 +392,7 @@ class Matcher {
       const Eigen::Matrix2d sR = g.sigma * (Eigen::Matrix2d() << std::cos(g.phi), -std::sin(g.phi),
                                             std::sin(g.phi), std::cos(g.phi))
                                                .finished();
-      for (int nbr : neighbours_[g.i]) {
+      for (int nbr : (*neighbour_lists_)[g.i]) {
         if (used_a_[nbr]) continue;
         const InterestPoint& pn = a_.points[nbr];
         const Eigen::Vector2d predicted = q + sR * (pn.uv - p);
@@ -438,8 +434,8 @@ class Matcher {
   const size_t na_, nb_;
   std::vector<std::vector<Candidate>> candidates_;  // Per A point, sorted by j.
   int num_candidates_ = 0;
-  std::unique_ptr<SpatialGrid> grid_a_, grid_b_;
-  std::vector<std::vector<int>> neighbours_;  // k nearest A points of each A point.
+  std::unique_ptr<SpatialGrid> grid_b_;
+  std::shared_ptr<const NeighbourLists> neighbour_lists_;  // k nearest A points of each A point.
   std::vector<bool> used_a_, used_b_;
 };
 
