@@ -8,9 +8,8 @@ namespace dala {
 
 SlidingWindowBa::Options SequenceBaOptions() {
   SlidingWindowBa::Options options;
-  options.use_marginalization = false;
-  // When the prior is turned on: the best variant on rendered and KITTI sequences (issue 4).
-  options.landmark_exit = SlidingWindowBa::LandmarkExit::kMarginalizeAll;
+  options.use_marginalization = true;
+  options.landmark_exit = SlidingWindowBa::LandmarkExit::kDropSharedObservations;
   return options;
 }
 

@@ -97,11 +97,14 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   SlidingWindowEstimatorOptions& b = o->ba;
   v->Field("ba", "window_size", &b.ba.window_size);
   v->Field("ba", "use_marginalization", &b.ba.use_marginalization);
-  // The enum as a name: drop_tracked_observations | marginalize_all | marginalize_all_keep_tracks.
+  // The enum as a name: drop_tracked_observations | drop_shared_observations | marginalize_all |
+  // marginalize_all_keep_tracks.
   using Exit = SlidingWindowBa::LandmarkExit;
   std::string exit = b.ba.landmark_exit == Exit::kDropTrackedObservations ? "drop_tracked_observations"
                      : b.ba.landmark_exit == Exit::kMarginalizeAll      ? "marginalize_all"
-                                                                        : "marginalize_all_keep_tracks";
+                     : b.ba.landmark_exit == Exit::kDropSharedObservations
+                         ? "drop_shared_observations"
+                         : "marginalize_all_keep_tracks";
   v->Field("ba", "landmark_exit", &exit);
   if (exit == "drop_tracked_observations") {
     b.ba.landmark_exit = Exit::kDropTrackedObservations;
@@ -109,9 +112,11 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
     b.ba.landmark_exit = Exit::kMarginalizeAll;
   } else if (exit == "marginalize_all_keep_tracks") {
     b.ba.landmark_exit = Exit::kMarginalizeAllKeepTracks;
+  } else if (exit == "drop_shared_observations") {
+    b.ba.landmark_exit = Exit::kDropSharedObservations;
   } else {
     throw Error() << "ba.landmark_exit '" << exit << "' is unknown: use drop_tracked_observations, "
-                  << "marginalize_all or marginalize_all_keep_tracks";
+                  << "drop_shared_observations, marginalize_all or marginalize_all_keep_tracks";
   }
   v->Field("ba", "loss_scale", &b.ba.loss_scale);
   v->Field("ba", "max_num_iterations", &b.ba.max_num_iterations);

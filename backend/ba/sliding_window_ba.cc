@@ -190,16 +190,26 @@ void SlidingWindowBa::MarginalizeOldest() {
   }
   const auto counts = CountObservations();
   std::set<LandmarkId> tracked;  // seen by the newest keyframe.
-  if (options_.landmark_exit == LandmarkExit::kDropTrackedObservations) {
-    for (const BaObservation& obs : window_.back().observations) tracked.insert(obs.landmark);
-  }
+  for (const BaObservation& obs : window_.back().observations) tracked.insert(obs.landmark);
+  // A landmark of m stays in the state (m's observation of it is dropped with m) when it keeps
+  // enough observations and the exit mode keeps it; else it leaves, marginalised with all its
+  // window observations.
+  const auto stays = [&](LandmarkId id) {
+    const bool enough = counts.at(id) - 1 >= options_.min_observations;
+    switch (options_.landmark_exit) {
+      case LandmarkExit::kDropTrackedObservations:
+        return enough && tracked.count(id) > 0;
+      case LandmarkExit::kDropSharedObservations:
+        return enough;
+      case LandmarkExit::kMarginalizeAll:
+      case LandmarkExit::kMarginalizeAllKeepTracks:
+        return false;
+    }
+    return false;
+  };
   std::set<LandmarkId> leaving;
   for (const BaObservation& obs : m.observations) {
-    if (!IsActive(obs.landmark, counts)) continue;
-    if (tracked.count(obs.landmark) && counts.at(obs.landmark) - 1 >= options_.min_observations) {
-      continue;  // kept in the state; m's observation of it is dropped with m.
-    }
-    leaving.insert(obs.landmark);
+    if (IsActive(obs.landmark, counts) && !stays(obs.landmark)) leaving.insert(obs.landmark);
   }
   std::map<KeyframeId, double*> block_of;
   for (KeyframeState& kf : window_) block_of[kf.id] = kf.x.data();
@@ -238,14 +248,14 @@ void SlidingWindowBa::MarginalizeOldest() {
   // The marginalised landmarks leave the state: their observations are consumed. Their last
   // estimate stays in landmarks_ as the initial value if they are observed again.
   window_.pop_front();
-  if (options_.landmark_exit == LandmarkExit::kMarginalizeAllKeepTracks) {
-    for (const BaObservation& obs : window_.back().observations) tracked.insert(obs.landmark);
-  }
+  // kMarginalizeAllKeepTracks: the tracked landmarks also keep their window observations.
+  const bool keep_tracked = options_.landmark_exit == LandmarkExit::kMarginalizeAllKeepTracks;
   for (KeyframeState& kf : window_) {
     auto& obs = kf.observations;
     obs.erase(std::remove_if(obs.begin(), obs.end(),
                              [&](const BaObservation& o) {
-                               return leaving.count(o.landmark) > 0 && !tracked.count(o.landmark);
+                               return leaving.count(o.landmark) > 0 &&
+                                      !(keep_tracked && tracked.count(o.landmark) > 0);
                              }),
               obs.end());
   }

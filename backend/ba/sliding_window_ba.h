@@ -71,6 +71,12 @@ class SlidingWindowBa {
     // other observations (VINS-Mono-like): their information is counted twice (overconfident),
     // but no track is cut.
     kMarginalizeAllKeepTracks,
+    // Landmarks that keep at least min_observations observations in the remaining keyframes
+    // stay in the state (non-linear, relinearised at every solve) and only the leaving
+    // keyframe's observations of them are dropped, as without a prior; the landmarks that would
+    // fall below min_observations are marginalised with their window observations, which a
+    // window without a prior would lose (OKVIS-like).
+    kDropSharedObservations,
   };
 
   struct Options {

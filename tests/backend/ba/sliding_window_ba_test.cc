@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include <algorithm>
 #include <random>
 
@@ -123,6 +125,27 @@ TEST(SlidingWindowBaTest, WindowWithPriorStaysCloseToBatch) {
   RecordProperty("ate_batch_mm", std::to_string(ate_batch * 1e3));
   RecordProperty("ate_window_mm", std::to_string(ate_window * 1e3));
   RecordProperty("ate_no_prior_mm", std::to_string(ate_ablation * 1e3));
+}
+
+// The default exit of sequences (SequenceBaOptions): landmarks that keep >= 2 observations stay
+// in the window, the others are marginalised into the prior. Close to the batch solution, and
+// not worse than the same window with its prior discarded.
+TEST(SlidingWindowBaTest, DropSharedObservationsWindowStaysCloseToBatch) {
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    BaSceneOptions so = SmallScene();
+    so.seed = seed;
+    const BaScene scene = MakeBaScene(so);
+    SlidingWindowBa::Options options;
+    options.landmark_exit = SlidingWindowBa::LandmarkExit::kDropSharedObservations;
+    const double ate_batch = AlignedAte(RunBatch(scene, options, 7), scene.T_w_c_gt);
+    const double ate_window = AlignedAte(RunSequential(scene, options, 7), scene.T_w_c_gt);
+    options.keep_prior = false;
+    const double ate_ablation = AlignedAte(RunSequential(scene, options, 7), scene.T_w_c_gt);
+    std::cout << "[ measured ] seed " << seed << ": batch " << ate_batch << ", window "
+              << ate_window << ", prior discarded " << ate_ablation << " m" << std::endl;
+    EXPECT_LT(ate_window, 2.0 * ate_batch + 0.005) << "seed " << seed;
+    EXPECT_LE(ate_window, 1.05 * ate_ablation) << "seed " << seed;
+  }
 }
 
 // Regression (issue 4, rover loop ATE 1.1-5.5 m with the prior): on a long run the prior's
