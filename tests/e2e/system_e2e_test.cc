@@ -34,14 +34,19 @@ SystemRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& opti
   return run;
 }
 
+// The first `frames` frames of the rendered rover loop, rendered with `seed`.
+sim::SimOptions RoverStretch(int frames, uint32_t seed) {
+  sim::SimOptions sim;
+  sim.preset = "rover_loop";
+  sim.frames = frames;
+  sim.seed = seed;
+  return sim;
+}
+
 // A 150-frame stretch of the rover loop (~37 m): every frame gets a pose, and the ATE is a
 // small fraction of the path (the target for the whole loop is 0.5 %).
 TEST(SystemE2e, RoverStretchStereoBa) {
-  sim::SimOptions sim;
-  sim.preset = "rover_loop";
-  sim.frames = 150;
-  sim.seed = 5;
-  const sim::SyntheticSequence seq(sim);
+  const sim::SyntheticSequence seq(RoverStretch(150, 5));
   const SystemRun run = RunSystem(seq, SystemOptions());
   ASSERT_TRUE(run.eval.ok) << run.eval.error;
   EXPECT_EQ(run.trajectory.size(), seq.size());
@@ -55,11 +60,7 @@ TEST(SystemE2e, RoverStretchStereoBa) {
 // The window solve in the background (default) and in the caller's thread give the same
 // trajectory, bit for bit: the overlap with the next frame's frontend must not change results.
 TEST(SystemE2e, BackgroundWindowSolveGivesTheSameTrajectory) {
-  sim::SimOptions sim;
-  sim.preset = "rover_loop";
-  sim.frames = 60;
-  sim.seed = 5;
-  const sim::SyntheticSequence seq(sim);
+  const sim::SyntheticSequence seq(RoverStretch(60, 5));
   SystemOptions foreground;
   foreground.ba.background_solve = false;
   SystemOptions background;
@@ -77,11 +78,7 @@ TEST(SystemE2e, BackgroundWindowSolveGivesTheSameTrajectory) {
 // The paper's filters on the same measurements: stereo EKF, and the bearing-only mono EKF whose
 // scale comes from the stereo visual motion (dead reckoning, as on the paper's robots).
 TEST(SystemE2e, RoverStretchEkfStereoAndMono) {
-  sim::SimOptions sim;
-  sim.preset = "rover_loop";
-  sim.frames = 100;
-  sim.seed = 7;
-  const sim::SyntheticSequence seq(sim);
+  const sim::SyntheticSequence seq(RoverStretch(100, 7));
   for (const char* mode : {"stereo", "mono"}) {
     SystemOptions options;
     options.estimator = "ekf";
@@ -123,11 +120,7 @@ std::string ReadAll(const std::string& path) {
 // the keys scripts rely on.
 TEST(SystemE2e, DalaRunIsDeterministicAndWritesEveryOutput) {
   testing::TempDir dir;
-  sim::SimOptions sim;
-  sim.preset = "rover_loop";
-  sim.frames = 40;
-  sim.seed = 9;
-  sim::WriteSyntheticDataset(sim, dir / "seq", false);
+  sim::WriteSyntheticDataset(RoverStretch(40, 9), dir / "seq", false);
   for (const char* out : {"a", "b"}) {
     const std::string cmd = std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " +
                             (dir / out) + " --progress=false > /dev/null 2>&1";
