@@ -25,6 +25,14 @@ Eigen::Matrix<double, kRows, 3> CameraJacobian(const StereoIntrinsics& K, const 
   return J;
 }
 
+// p_c = R_w_c^T (p_w - t_w_c) for the pose block x; also returns R_w_c and d = p_w - t_w_c.
+Eigen::Vector3d PointInCamera(const double* x, const double* p_w, Eigen::Matrix3d* R_w_c,
+                              Eigen::Vector3d* d) {
+  *R_w_c = Eigen::Quaterniond(x[3], x[0], x[1], x[2]).normalized().toRotationMatrix();
+  *d = Eigen::Map<const Eigen::Vector3d>(p_w) - Eigen::Map<const Eigen::Vector3d>(x + 4);
+  return R_w_c->transpose() * *d;
+}
+
 }  // namespace
 
 template <int kRows>
@@ -39,11 +47,9 @@ template <int kRows>
 bool ReprojectionCost<kRows>::Evaluate(double const* const* parameters, double* residuals,
                                        double** jacobians) const {
   const double* x = parameters[0];
-  const Eigen::Map<const Eigen::Vector3d> p_w(parameters[1]);
-  const Eigen::Matrix3d R_w_c =
-      Eigen::Quaterniond(x[3], x[0], x[1], x[2]).normalized().toRotationMatrix();
-  const Eigen::Vector3d d = p_w - Eigen::Map<const Eigen::Vector3d>(x + 4);
-  const Eigen::Vector3d p_c = R_w_c.transpose() * d;
+  Eigen::Matrix3d R_w_c;
+  Eigen::Vector3d d;
+  const Eigen::Vector3d p_c = PointInCamera(x, parameters[1], &R_w_c, &d);
   const double iz = 1.0 / p_c.z();
   Eigen::Map<Eigen::Matrix<double, kRows, 1>> r(residuals);
   r[0] = K_.fx * p_c.x() * iz + K_.cx;
@@ -100,10 +106,9 @@ double WhitenedSquaredError(const StereoIntrinsics& K, const BaObservation& obs,
     e2 = r.squaredNorm();
   }
   if (depth) {
-    const Eigen::Quaterniond q_w_c(x[3], x[0], x[1], x[2]);
-    *depth = (q_w_c.normalized().conjugate() *
-              (Eigen::Map<const Eigen::Vector3d>(p_w) - Eigen::Map<const Eigen::Vector3d>(x + 4)))
-                 .z();
+    Eigen::Matrix3d R_w_c;
+    Eigen::Vector3d d;
+    *depth = PointInCamera(x, p_w, &R_w_c, &d).z();
   }
   return e2;
 }
