@@ -28,6 +28,9 @@ namespace dala {
 
 struct TrackResult {
   TrackingStatus status = TrackingStatus::kInitializing;
+  // The frame's pose as estimated when Track returns. With the BA estimator's window solve in
+  // the background (ba.background_solve, default), a keyframe's pose is the one before its
+  // window solve; trajectory() gives every pose as later optimisation corrected it.
   Pose T_w_c = Pose::Identity();
   bool valid = false;  // The estimator estimated this frame (false: extrapolated).
   bool keyframe = false;
