@@ -2,6 +2,9 @@
 
 #include <glog/logging.h>
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -28,6 +31,34 @@ bool EvalOptions::IsValid(std::string* why) const {
   }
   return true;
 }
+
+namespace {
+
+// The warning of evaluate.h on the rotation about the path, or "" (positions p_gt, n >= 3).
+std::string PathAxisRotationWarning(const std::vector<Eigen::Vector3d>& p_gt, double ate_rmse) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : p_gt) mean += p;
+  mean /= static_cast<double>(p_gt.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : p_gt) cov += (p - mean) * (p - mean).transpose();
+  cov /= static_cast<double>(p_gt.size());
+  const Eigen::Vector3d lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues();
+  // RMS distance from the principal axis: the two smaller eigenvalues (ascending order).
+  const double lateral_m = std::sqrt(std::max(0.0, lambda[0] + lambda[1]));
+  constexpr double kMaxAmbiguityDeg = 5.0;
+  const double ambiguity_deg = std::atan2(ate_rmse, lateral_m) * 180.0 / M_PI;
+  if (!(ambiguity_deg > kMaxAmbiguityDeg)) return "";
+  char buf[400];
+  std::snprintf(buf, sizeof(buf),
+                "the ground-truth positions lie almost on a line or at one point (%.3f m RMS off "
+                "their axis against an ATE of %.3f m): the alignment cannot fix the rotation about "
+                "that axis (to within ~%.0f deg), so the ATE rotation errors are not meaningful; "
+                "the translation errors and RPE are",
+                lateral_m, ate_rmse, ambiguity_deg);
+  return buf;
+}
+
+}  // namespace
 
 EvalResult Evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptions& options) {
   std::string why;
@@ -61,6 +92,10 @@ EvalResult Evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   r.gt_path_length_m = r.pair_distance_m.back();
 
   r.ate = ComputeAte(r.pairs.T_w_c_gt, T_w_c_aligned);
+  if (options.alignment != AlignmentType::kNone) {
+    const std::string warning = PathAxisRotationWarning(p_gt, r.ate.translation.rmse);
+    if (!warning.empty()) r.warnings.push_back(warning);
+  }
   // RPE is invariant to the rigid part of the alignment; use the aligned estimate so that a
   // Sim(3) scale applies (what evo_rpe -as does).
   r.has_rpe = ComputeRpe(r.pairs.T_w_c_gt, T_w_c_aligned, options.rpe_delta, options.rpe_delta_unit,
@@ -94,6 +129,7 @@ nlohmann::json EvalResultToJson(const EvalResult& r) {
   j["est_path_length"] = r.est_path_length_m;
   j["alignment"] = AlignmentTypeName(r.options.alignment);
   j["scale"] = r.alignment.scale;
+  j["warnings"] = r.warnings;
   nlohmann::json ate = StatsJson(r.ate.translation);
   ate["rot_rmse_deg"] = r.ate.rotation_deg.rmse;
   ate["rot_mean_deg"] = r.ate.rotation_deg.mean;
@@ -180,6 +216,7 @@ std::string EvalResultToTable(const EvalResult& r) {
   } else {
     os << "KITTI segments: path too short for a 100 m segment\n";
   }
+  for (const std::string& w : r.warnings) os << "note: " << w << "\n";
   return os.str();
 }
 

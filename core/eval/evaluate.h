@@ -57,9 +57,17 @@ struct EvalResult {
   RpeResult rpe;
   bool has_kitti = false;
   KittiSegmentResult kitti;
+  // Caveats on reading the numbers (not errors), e.g. an aligned ATE rotation on a straight
+  // path (see Evaluate).
+  std::vector<std::string> warnings;
 };
 
 // Evaluates `est` against `gt`. Never throws on data: a result with ok == false says why.
+// Warning: with an SE(3) / Sim(3) alignment, a rotation about the ground truth's principal axis
+// moves the positions by (angle x their distance from that axis). When that distance (RMS) is
+// small against the ATE, positions cannot fix this rotation (a straight drive: KITTI 06 0-50,
+// 5 cm of lateral spread over 60 m), so the ATE rotation errors (rot_*_deg) then mostly measure
+// the arbitrary fitted roll. A warning says so when atan(ATE rmse / lateral spread) > 5 deg.
 // Options must be valid (CHECKed: validate user input with IsValid first).
 EvalResult Evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptions& options);
 

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "core/eval/evaluate.h"
 #include "tests/core/eval/eval_test_util.h"
@@ -253,6 +254,37 @@ TEST(EvalOptions, IsValidRejectsBadValues) {
   EXPECT_TRUE(o.IsValid(&why));
   o.rpe_delta = 0;
   EXPECT_FALSE(o.IsValid(&why));
+}
+
+// A straight drive (KITTI-like: 60 m, a few cm of lateral wiggle): positions cannot fix the
+// aligned roll about the path, and the result says so; a helix (3D spread) and an unaligned
+// evaluation do not get the warning.
+TEST(EvalWarnings, StraightPathRotationAboutThePathIsFlagged) {
+  Trajectory gt, est;
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector3d p(0.03 * std::sin(0.3 * i), 0.02 * std::cos(0.2 * i), 1.0 * i);
+    gt.Add(i * 100000000LL, MakePose(Eigen::Quaterniond::Identity(), p));
+    est.Add(i * 100000000LL, MakePose(Eigen::Quaterniond::Identity(),
+                                      p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))));
+  }
+  const EvalResult straight = Evaluate(gt, est, EvalOptions());
+  ASSERT_TRUE(straight.ok) << straight.error;
+  ASSERT_EQ(straight.warnings.size(), 1u);
+  EXPECT_NE(straight.warnings[0].find("almost on a line"), std::string::npos);
+  EXPECT_EQ(EvalResultToJson(straight).at("warnings").size(), 1u);
+  EXPECT_NE(EvalResultToTable(straight).find("note: "), std::string::npos);
+
+  EvalOptions unaligned;
+  unaligned.alignment = AlignmentType::kNone;
+  EXPECT_TRUE(Evaluate(gt, est, unaligned).warnings.empty());
+
+  const Trajectory helix = HelixTrajectory(60);
+  const EvalResult spread = Evaluate(helix, helix, EvalOptions());
+  ASSERT_TRUE(spread.ok);
+  EXPECT_TRUE(spread.warnings.empty());
+  EXPECT_TRUE(EvalResultToJson(spread).at("warnings").empty());
 }
 
 TEST(EvalJson, HasTheDocumentedKeys) {
