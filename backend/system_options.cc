@@ -1,9 +1,12 @@
 #include "backend/system_options.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
+#include <iterator>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -97,27 +100,28 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   SlidingWindowEstimatorOptions& b = o->ba;
   v->Field("ba", "window_size", &b.ba.window_size);
   v->Field("ba", "use_marginalization", &b.ba.use_marginalization);
-  // The enum as a name: drop_tracked_observations | drop_shared_observations | marginalize_all |
-  // marginalize_all_keep_tracks.
+  // The enum as a name, both ways from one table.
   using Exit = SlidingWindowBa::LandmarkExit;
-  std::string exit = b.ba.landmark_exit == Exit::kDropTrackedObservations ? "drop_tracked_observations"
-                     : b.ba.landmark_exit == Exit::kMarginalizeAll      ? "marginalize_all"
-                     : b.ba.landmark_exit == Exit::kDropSharedObservations
-                         ? "drop_shared_observations"
-                         : "marginalize_all_keep_tracks";
-  v->Field("ba", "landmark_exit", &exit);
-  if (exit == "drop_tracked_observations") {
-    b.ba.landmark_exit = Exit::kDropTrackedObservations;
-  } else if (exit == "marginalize_all") {
-    b.ba.landmark_exit = Exit::kMarginalizeAll;
-  } else if (exit == "marginalize_all_keep_tracks") {
-    b.ba.landmark_exit = Exit::kMarginalizeAllKeepTracks;
-  } else if (exit == "drop_shared_observations") {
-    b.ba.landmark_exit = Exit::kDropSharedObservations;
-  } else {
-    throw Error() << "ba.landmark_exit '" << exit << "' is unknown: use drop_tracked_observations, "
-                  << "drop_shared_observations, marginalize_all or marginalize_all_keep_tracks";
+  static const std::pair<const char*, Exit> kExitNames[] = {
+      {"drop_tracked_observations", Exit::kDropTrackedObservations},
+      {"drop_shared_observations", Exit::kDropSharedObservations},
+      {"marginalize_all", Exit::kMarginalizeAll},
+      {"marginalize_all_keep_tracks", Exit::kMarginalizeAllKeepTracks}};
+  std::string exit;
+  for (const auto& [name, value] : kExitNames) {
+    if (value == b.ba.landmark_exit) exit = name;
   }
+  v->Field("ba", "landmark_exit", &exit);
+  const auto* known = std::find_if(std::begin(kExitNames), std::end(kExitNames),
+                                   [&](const auto& entry) { return exit == entry.first; });
+  if (known == std::end(kExitNames)) {
+    std::string names;
+    for (const auto& entry : kExitNames) {
+      names += std::string(names.empty() ? "" : ", ") + entry.first;
+    }
+    throw Error() << "ba.landmark_exit '" << exit << "' is unknown: use one of " << names;
+  }
+  b.ba.landmark_exit = known->second;
   v->Field("ba", "loss_scale", &b.ba.loss_scale);
   v->Field("ba", "max_num_iterations", &b.ba.max_num_iterations);
   v->Field("ba", "max_solver_time_in_seconds", &b.ba.max_solver_time_in_seconds);

@@ -249,7 +249,8 @@ int RunRun(const std::vector<std::string>& args) {
   if (summary.contains("ate")) {
     std::cout << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>()
               << " m (" << (options.mode == "mono" ? "sim3" : "se3") << " alignment)\n";
-    for (const auto& w : summary["warnings"]) std::cout << "note        " << w.get<std::string>() << "\n";
+    for (const auto& w : summary["warnings"])
+      std::cout << "note        " << w.get<std::string>() << "\n";
   }
   std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
             << "map.dmap, report.json" << (gt ? ", trajectory.png" : "") << ")\n";

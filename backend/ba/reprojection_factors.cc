@@ -13,8 +13,8 @@ namespace {
 
 // The rows of J_c = dr/dp_c (whitened), see the header.
 template <int kRows>
-Eigen::Matrix<double, kRows, 3> CameraJacobian(const StereoIntrinsics& K, const Eigen::Vector3d& p_c,
-                                               double inv_sigma) {
+Eigen::Matrix<double, kRows, 3> CameraJacobian(const StereoIntrinsics& K,
+                                               const Eigen::Vector3d& p_c, double inv_sigma) {
   const double iz = 1.0 / p_c.z();
   const double a = K.fx * iz * inv_sigma;
   const double b = K.fy * iz * inv_sigma;

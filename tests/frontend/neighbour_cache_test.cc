@@ -22,7 +22,8 @@ std::vector<Eigen::Vector2d> RandomPoints(int n, uint32_t seed) {
 std::vector<int> BruteForceNearest(const std::vector<Eigen::Vector2d>& points, int index, int k) {
   std::vector<std::pair<double, int>> all;
   for (size_t j = 0; j < points.size(); ++j) {
-    if (static_cast<int>(j) != index) all.emplace_back((points[j] - points[index]).squaredNorm(), j);
+    if (static_cast<int>(j) != index)
+      all.emplace_back((points[j] - points[index]).squaredNorm(), j);
   }
   std::sort(all.begin(), all.end());
   std::vector<int> out;
