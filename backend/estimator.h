@@ -34,6 +34,11 @@ struct EstimatorOutput {
   // False when the estimator could not estimate this frame (it then extrapolates T_w_c and the
   // trajectory records the frame as not tracked).
   bool valid = false;
+  // A monocular estimator waiting for its two-view initialisation: the frame has no pose yet
+  // (T_w_c is meaningless; it may get one later, when the map exists, and trajectory() then
+  // holds it) and `note` says why ("initialising: too little parallax: ...").
+  bool initializing = false;
+  std::string note;
   int landmarks_in_state = 0;  // Landmarks currently estimated (window / filter state).
   bool loop_closed = false;    // A loop closure corrected the trajectory at this frame.
 };
@@ -49,8 +54,9 @@ class Estimator {
   // Consumes the next frame's measurement (frames in time order).
   virtual EstimatorOutput Add(const FrameMeasurement& measurement) = 0;
 
-  // The estimated pose of every frame consumed so far, in order (with loop corrections applied
-  // to the past).
+  // The estimated pose of every frame consumed so far that has one, in order (with loop
+  // corrections applied to the past). Frames without a pose (a monocular estimator before its
+  // initialisation) are left out: match the poses to frames by time.
   virtual Trajectory trajectory() const = 0;
 
   // The current map.

@@ -3,6 +3,7 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <sstream>
 
 namespace dala {
 
@@ -33,7 +34,7 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
     return fail("ba.max_new_landmarks_per_keyframe must be >= 10");
   if (grid_cols < 1 || grid_rows < 1) return fail("ba.grid_cols and ba.grid_rows must be >= 1");
   if (max_landmark_depth_m <= 0) return fail("ba.max_landmark_depth_m must be > 0");
-  return true;
+  return mono_init.IsValid(why);
 }
 
 namespace {
@@ -86,7 +87,8 @@ SlidingWindowEstimator::SlidingWindowEstimator(const StereoRig& rig,
     : rig_(rig), options_(options), ba_(IntrinsicsOf(rig), options.ba) {
   std::string why;
   CHECK(options_.IsValid(&why)) << why;
-  CHECK(rig_.is_stereo()) << "SlidingWindowEstimator needs a stereo rig (mono BA is not built)";
+  CHECK(!rig_.left.HasDistortion()) << "SlidingWindowEstimator expects rectified images";
+  if (!rig_.is_stereo()) initializer_.emplace(rig_.left, options_.mono_init);
 }
 
 std::vector<BaObservation> SlidingWindowEstimator::WindowObservations(
@@ -112,11 +114,13 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
                               0, options_.grid_rows - 1);
     return cy * options_.grid_cols + cx;
   };
+  const bool stereo = rig_.is_stereo();
   for (const FeatureObservation& o : m.observations) {
     if (landmark_observations_.count(o.landmark)) {
       out.push_back(ToBa(o));
       ++cell_count[cell_of(o.uv)];
-    } else if (o.has_stereo() && o.p_c0.z() < options_.max_landmark_depth_m) {
+    } else if (stereo ? o.has_stereo() && o.p_c0.z() < options_.max_landmark_depth_m
+                      : last_keyframe_observations_.count(o.landmark) > 0) {
       fresh.push_back(&o);
     }
   }
@@ -134,7 +138,13 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
     ++n;
     ++added;
     out.push_back(ToBa(*o));
-    ba_.SetLandmarkPosition(o->landmark, T_w_c * o->p_c0);
+    if (stereo) {
+      ba_.SetLandmarkPosition(o->landmark, T_w_c * o->p_c0);
+    } else {
+      // Mono: the previous keyframe's view of it makes the pair the window triangulates.
+      ba_.AddObservation(last_keyframe_, last_keyframe_observations_.at(o->landmark));
+      ++landmark_observations_[o->landmark];
+    }
     anchor_.emplace(o->landmark, KeyframeId(num_keyframes_ - 1));
   }
   for (const BaObservation& b : out) ++landmark_observations_[b.landmark];
@@ -212,38 +222,126 @@ void SlidingWindowEstimator::SolveWindow(KeyframeId id) {
   for (const KeyframeId k : ba_.WindowKeyframes()) keyframe_poses_[k] = *ba_.KeyframePose(k);
 }
 
+Pose SlidingWindowEstimator::PredictPose(const FrameMeasurement& m) const {
+  Pose velocity = velocity_;
+  if (m.motion) {
+    if (rig_.is_stereo()) {
+      velocity = m.motion->T_prev_cur;
+    } else {
+      // The essential matrix's rotation, the constant velocity's translation (no scale).
+      velocity.linear() = m.motion->T_prev_cur.linear();
+    }
+  }
+  return Orthonormalized(T_w_prev_ * velocity);
+}
+
+EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasurement& m) {
+  const std::optional<MonoInitialization> init = initializer_->Add(m);
+  EstimatorOutput out;
+  if (!init) {
+    frames_.push_back({m.t_ns, KeyframeId(), Pose::Identity(), /*has_pose=*/false});
+    out.initializing = true;
+    out.note = "initialising: " + initializer_->reason();
+    return out;
+  }
+  StartMonoMap(*init);
+  initializer_.reset();
+  out.valid = true;
+  out.T_w_c = T_w_prev_;
+  out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
+  std::ostringstream note;
+  note.precision(3);
+  note << "initialised from frame " << init->reference.frame << " (" << init->p_ref.size()
+       << " points, " << TwoViewModelName(init->two_view.model) << ", median parallax "
+       << init->two_view.median_parallax_deg << " deg)";
+  out.note = note.str();
+  VLOG(1) << "frame " << m.frame << ": " << out.note;
+  return out;
+}
+
+void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
+  const size_t current_index = frames_.size();
+  const size_t reference_index = current_index - init.between.size() - 1;
+  CHECK_EQ(frames_.at(reference_index).t_ns, init.reference.t_ns);
+  const Pose T_w_cur = init.T_ref_cur;  // World = the reference camera.
+  for (const auto& [id, p_ref] : init.p_ref) ba_.SetLandmarkPosition(id, p_ref);
+  const auto make_keyframe = [&](const FrameMeasurement& f, const Pose& T_w_c) {
+    BaKeyframe kf;
+    kf.id = KeyframeId(num_keyframes_++);
+    kf.t_ns = f.t_ns;
+    kf.T_w_c = T_w_c;
+    for (const FeatureObservation& o : f.observations) {
+      if (!init.p_ref.count(o.landmark)) continue;
+      kf.observations.push_back(ToBa(o));
+      ++landmark_observations_[o.landmark];
+    }
+    ba_.AddKeyframe(kf);
+    keyframe_poses_[kf.id] = T_w_c;
+    keyframe_of_frame_[f.frame] = kf.id;
+    return kf.id;
+  };
+  const KeyframeId reference = make_keyframe(init.reference, Pose::Identity());
+  const KeyframeId current = make_keyframe(init.current, T_w_cur);
+  for (const auto& [id, p_ref] : init.p_ref) anchor_.emplace(id, reference);
+  frames_[reference_index] = {init.reference.t_ns, reference, Pose::Identity(), true};
+  SolveWindow(current);
+
+  // The frames between the two views, localised in the new map (their guess: interpolated).
+  const double span = static_cast<double>(init.current.t_ns - init.reference.t_ns);
+  std::optional<Pose> T_w_last;
+  for (size_t j = 0; j < init.between.size(); ++j) {
+    const FrameMeasurement& f = init.between[j];
+    const double s = span > 0 ? (f.t_ns - init.reference.t_ns) / span : 0.5;
+    const Pose guess = InterpolatePose(Pose::Identity(), keyframe_poses_.at(current), s);
+    const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(f), guess, options_.pose_only);
+    if (r.status != PoseOnlyStatus::kOk) {
+      T_w_last.reset();
+      continue;
+    }
+    frames_[reference_index + 1 + j] = {f.t_ns, reference, r.T_w_c, true};
+    T_w_last = r.T_w_c;
+  }
+  frames_.push_back({init.current.t_ns, current, Pose::Identity(), true});
+  T_w_prev_ = keyframe_poses_.at(current);
+  // The velocity: from the frame before when it was localised, else the mean over the span.
+  velocity_ = T_w_last ? T_w_last->inverse() * T_w_prev_
+                       : InterpolatePose(Pose::Identity(), T_w_prev_,
+                                         1.0 / static_cast<double>(init.between.size() + 1));
+  last_keyframe_ = current;
+  last_keyframe_observations_.clear();
+  for (const FeatureObservation& o : init.current.observations) {
+    last_keyframe_observations_[o.landmark] = ToBa(o);
+  }
+}
+
 EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   WaitForWindowSolve();
   if (solved_in_background_) {
     T_w_prev_ = keyframe_poses_.at(*solved_in_background_);
     solved_in_background_.reset();
   }
+  if (initializer_) return AddBeforeInitialization(m);
+  const bool stereo = rig_.is_stereo();
   EstimatorOutput out;
   // Initial guess: the previous estimate moved by the visual motion (or the last velocity).
-  const bool first = frames_.empty();
-  if (!first && m.motion) velocity_ = m.motion->T_prev_cur;
-  Pose T_w_c = first ? Pose::Identity() : Orthonormalized(T_w_prev_ * velocity_);
-  out.valid = first || m.motion.has_value();
+  const bool first = frames_.empty();  // Stereo only: mono starts in AddBeforeInitialization.
+  if (stereo && !first && m.motion) velocity_ = m.motion->T_prev_cur;
+  Pose T_w_c = first ? Pose::Identity() : PredictPose(m);
+  out.valid = stereo && (first || m.motion.has_value());
 
-  if (!first && !m.is_keyframe) {
+  if (!first) {
+    if (m.is_keyframe && m.loop && options_.loop.enable) {
+      out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
+    }
+    // Pose-only tracking against the window (a keyframe: before it joins the window).
     const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(m), T_w_c, options_.pose_only);
     if (r.status == PoseOnlyStatus::kOk) {
       T_w_c = r.T_w_c;
       out.valid = true;
     }
   }
-  if (first || m.is_keyframe) {
-    if (m.loop && options_.loop.enable && !first) {
-      out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
-    }
-    if (!first) {
-      // Refine the guess against the window before the keyframe joins it.
-      const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(m), T_w_c, options_.pose_only);
-      if (r.status == PoseOnlyStatus::kOk) {
-        T_w_c = r.T_w_c;
-        out.valid = true;
-      }
-    }
+  // A mono keyframe needs a tracked pose (see the class comment).
+  if (first || (m.is_keyframe && (stereo || out.valid))) {
     BaKeyframe kf;
     kf.id = KeyframeId(num_keyframes_++);
     kf.t_ns = m.t_ns;
@@ -253,6 +351,13 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     keyframe_poses_[kf.id] = T_w_c;
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});
     keyframe_of_frame_[m.frame] = kf.id;
+    if (!stereo) {
+      last_keyframe_ = kf.id;
+      last_keyframe_observations_.clear();
+      for (const FeatureObservation& o : m.observations) {
+        last_keyframe_observations_[o.landmark] = ToBa(o);
+      }
+    }
     out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
     if (options_.background_solve) {
       solved_in_background_ = kf.id;
@@ -266,6 +371,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     frames_.push_back({m.t_ns, ref, KeyframePoseNow(ref).inverse() * T_w_c});
     out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
   }
+  if (!stereo && out.valid) velocity_ = T_w_prev_.inverse() * T_w_c;
   T_w_prev_ = T_w_c;
   out.T_w_c = T_w_c;
   return out;
@@ -275,7 +381,9 @@ Trajectory SlidingWindowEstimator::trajectory() const {
   WaitForWindowSolve();
   Trajectory t;
   t.poses.reserve(frames_.size());
-  for (const FrameRecord& f : frames_) t.Add(f.t_ns, KeyframePoseNow(f.reference) * f.T_kf_c);
+  for (const FrameRecord& f : frames_) {
+    if (f.has_pose) t.Add(f.t_ns, KeyframePoseNow(f.reference) * f.T_kf_c);
+  }
   return t;
 }
 

@@ -1,9 +1,27 @@
 #ifndef DALA_BACKEND_SLIDING_WINDOW_ESTIMATOR_H_
 #define DALA_BACKEND_SLIDING_WINDOW_ESTIMATOR_H_
 
-// SlidingWindowEstimator: the smoothing estimator of dala (stereo). It feeds the frontend's
-// keyframes into the Ceres sliding-window bundle adjustment (backend/ba/sliding_window_ba.h) and
-// tracks the frames between keyframes by a pose-only optimisation against the window's landmarks.
+// SlidingWindowEstimator: the smoothing estimator of dala, for a stereo rig or one camera. It
+// feeds the frontend's keyframes into the Ceres sliding-window bundle adjustment
+// (backend/ba/sliding_window_ba.h) and tracks the frames between keyframes by a pose-only
+// optimisation against the window's landmarks. Stereo and mono share everything but three
+// points (stereo = mono + a right-image residual):
+//   - the start: stereo starts at the first frame (its points have depth); mono waits for the
+//     two-view initialisation (backend/mono/mono_initializer.h): frames until then have no pose
+//     and are reported "initialising: <reason>"; on success the reference frame and the current
+//     one become the first two keyframes (world = the reference camera, unit = their distance)
+//     with the triangulated landmarks, and the frames between them are localised against that
+//     map (pose-only), so they get a pose after all;
+//   - new landmarks at a keyframe: stereo ones come with their triangulated point; mono ones are
+//     chosen among the landmarks the previous keyframe also observed, that observation is added
+//     to the previous keyframe (SlidingWindowBa::AddObservation), and the window triangulates
+//     them (DLT, once the rays meet at min_triangulation_parallax_deg);
+//   - the motion prior: the stereo visual motion is metric; the mono one has no scale, so a mono
+//     frame starts from the constant velocity of the estimator's own last two poses, rotated by
+//     the frontend's essential-matrix rotation when there is one. A mono frame whose pose-only
+//     tracking fails is lost (not valid) and never becomes a keyframe (a keyframe at a guessed
+//     pose would triangulate a wrong map); the gauge of a mono window holds two keyframes, which
+//     also carries the scale (SlidingWindowBa).
 //
 // Every frame's pose is stored relative to a keyframe (the keyframe itself: identity; a frame
 // between keyframes: T_kf_c from its pose-only estimate), so the trajectory follows later
@@ -51,6 +69,7 @@
 #include "backend/ba/pose_graph.h"
 #include "backend/ba/sliding_window_ba.h"
 #include "backend/estimator.h"
+#include "backend/mono/mono_initializer.h"
 #include "core/camera.h"
 #include "frontend/worker_thread.h"
 
@@ -96,17 +115,19 @@ struct SlidingWindowEstimatorOptions {
   double max_landmark_depth_m = 60.0;
   BaLoopClosureOptions loop;
   bool background_solve = true;  // see the class comment.
+  MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
 
   bool IsValid(std::string* why) const;
 };
 
 class SlidingWindowEstimator : public Estimator {
  public:
-  // Stereo rigs only (CHECK): monocular BA is not implemented (see docs/backend.md).
+  // A stereo rig (baseline > 0) runs the stereo estimator, a monocular one (baseline 0) the
+  // mono estimator; the camera must be rectified (no distortion).
   SlidingWindowEstimator(const StereoRig& rig, const SlidingWindowEstimatorOptions& options);
 
   std::string name() const override { return "ba"; }
-  std::string mode() const override { return "stereo"; }
+  std::string mode() const override { return rig_.is_stereo() ? "stereo" : "mono"; }
   EstimatorOutput Add(const FrameMeasurement& measurement) override;
   Trajectory trajectory() const override;
   std::vector<MapPoint> map() const override;
@@ -123,7 +144,14 @@ class SlidingWindowEstimator : public Estimator {
     int64_t t_ns = 0;
     KeyframeId reference;
     Pose T_kf_c = Pose::Identity();
+    bool has_pose = true;  // false: before the mono initialisation (left out of trajectory()).
   };
+  // Mono: feeds the initializer; on success builds the first two keyframes and localises the
+  // frames between them.
+  EstimatorOutput AddBeforeInitialization(const FrameMeasurement& m);
+  void StartMonoMap(const MonoInitialization& init);
+  // The initial guess of the current frame's pose (see the class comment).
+  Pose PredictPose(const FrameMeasurement& m) const;
   Pose KeyframePoseNow(KeyframeId id) const;
   std::vector<BaObservation> SelectKeyframeObservations(const FrameMeasurement& m,
                                                         const Pose& T_w_c);
@@ -149,7 +177,12 @@ class SlidingWindowEstimator : public Estimator {
   std::map<FrameId, KeyframeId> keyframe_of_frame_;
   std::vector<PoseGraphEdge> loop_edges_;              // Every loop closed so far.
   Pose T_w_prev_ = Pose::Identity();
-  Pose velocity_ = Pose::Identity();
+  Pose velocity_ = Pose::Identity();  // T_prev_cur of the last frame.
+  // Mono: the initializer until the map exists, and every observation of the last keyframe
+  // (the candidates for new landmarks at the next one).
+  std::optional<MonoInitializer> initializer_;
+  KeyframeId last_keyframe_;
+  std::map<LandmarkId, BaObservation> last_keyframe_observations_;
   int num_keyframes_ = 0;
   // The keyframe whose window solve ran in the background since the last Add (its solved pose
   // becomes the next frame's starting point).

@@ -2,7 +2,9 @@
 
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <chrono>
+#include <map>
 
 #include "backend/ekf/mono_ekf.h"
 #include "backend/ekf/stereo_ekf.h"
@@ -12,19 +14,24 @@
 namespace dala {
 
 std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptions& options) {
-  if (options.estimator == "ba" && options.mode == "stereo") {
+  if (options.estimator == "ba") {
+    // Stereo or mono by the rig (System gives a mono rig in mode "mono").
+    if ((options.mode == "stereo") != rig.is_stereo()) {
+      throw Error() << "estimator 'ba' in mode '" << options.mode << "' needs a "
+                    << (rig.is_stereo() ? "monocular" : "stereo") << " rig";
+    }
     return std::make_unique<SlidingWindowEstimator>(rig, options.ba);
   }
   if (options.estimator == "ekf" && options.mode == "stereo") {
     return std::make_unique<StereoEkfEstimator>(rig, options.ekf_stereo);
   }
   if (options.estimator == "ekf" && options.mode == "mono") {
-    // On a stereo dataset the frontend still runs stereo: its visual motion is the mono EKF's
+    // With mono_stereo_motion the frontend runs stereo: its visual motion is the mono EKF's
     // scale-fixing dead reckoning (as on the paper's robots); the filter uses left pixels only.
     return std::make_unique<MonoEkfEstimator>(rig.left, options.ekf_mono);
   }
   throw Error() << "estimator '" << options.estimator << "' in mode '" << options.mode
-                << "' is not supported; available: ba/stereo, ekf/stereo, ekf/mono";
+                << "' is not supported; available: ba/stereo, ba/mono, ekf/stereo, ekf/mono";
 }
 
 System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), options_(options) {
@@ -34,6 +41,12 @@ System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), 
   if (options_.mode == "stereo" && !rig_.is_stereo()) {
     throw Error() << "stereo mode needs a stereo dataset; this one is monocular: use --mode mono";
   }
+  if (options_.mono_stereo_motion && !rig_.is_stereo()) {
+    throw Error() << "mono_stereo_motion needs a stereo dataset (its visual motion feeds the mono "
+                     "EKF); this one is monocular: drop --set mono_stereo_motion=1";
+  }
+  // Mode "mono" is one camera: the right image, if any, is never used.
+  if (options_.mode == "mono" && !options_.mono_stereo_motion) rig_.baseline = 0.0;
   estimator_ = MakeEstimator(rig_, options_);
   frontend_ = std::make_unique<Frontend>(rig_, options_.frontend);
 }
@@ -49,8 +62,9 @@ TrackResult System::Track(const Frame& frame) {
   FrameStats s;
   s.frame = frame.id;
   s.t_ns = frame.t_ns;
-  s.status = m.status;
+  s.status = e.initializing ? TrackingStatus::kInitializing : m.status;
   s.valid = e.valid;
+  s.note = e.note;
   s.keyframe = m.is_keyframe;
   s.features = static_cast<int>(m.observations.size());
   for (const FeatureObservation& o : m.observations) s.tracked += o.track_length > 1;
@@ -64,7 +78,7 @@ TrackResult System::Track(const Frame& frame) {
   if (m.is_keyframe) RecordKeyframe();
 
   TrackResult r;
-  r.status = m.status;
+  r.status = s.status;
   r.T_w_c = e.T_w_c;
   r.valid = e.valid;
   r.keyframe = m.is_keyframe;
@@ -92,22 +106,38 @@ void System::RecordKeyframe() {
   }
   keyframe_records_.push_back(std::move(record));
   keyframe_trajectory_index_.push_back(stats_.size() - 1);
+  keyframe_has_pose_.push_back(false);
 }
 
 void System::RefreshKeyframePoses() const {
+  // The trajectory leaves out the frames without a pose (mono before its initialisation):
+  // match by time.
   const Trajectory trajectory = estimator_->trajectory();
+  std::map<int64_t, const Pose*> pose_at;
+  for (const StampedPose& p : trajectory.poses) pose_at[p.t_ns] = &p.T_w_c;
   for (size_t k = 0; k < keyframe_records_.size(); ++k) {
-    const size_t index = keyframe_trajectory_index_[k];
-    CHECK_LT(index, trajectory.poses.size());
-    keyframe_records_[k].frame = stats_[index].frame;
-    keyframe_records_[k].t_ns = trajectory.poses[index].t_ns;
-    keyframe_records_[k].T_w_c = trajectory.poses[index].T_w_c;
+    const FrameStats& s = stats_[keyframe_trajectory_index_[k]];
+    keyframe_records_[k].frame = s.frame;
+    keyframe_records_[k].t_ns = s.t_ns;
+    const auto it = pose_at.find(s.t_ns);
+    keyframe_has_pose_[k] = it != pose_at.end();
+    if (keyframe_has_pose_[k]) keyframe_records_[k].T_w_c = *it->second;
   }
 }
 
 std::vector<SavedKeyframe> System::keyframes() const {
   RefreshKeyframePoses();
-  return keyframe_records_;
+  std::vector<SavedKeyframe> out;
+  for (size_t k = 0; k < keyframe_records_.size(); ++k) {
+    if (keyframe_has_pose_[k]) out.push_back(keyframe_records_[k]);
+  }
+  return out;
+}
+
+std::string System::ScaleDescription() const {
+  if (options_.mode == "stereo") return "metric (stereo)";
+  if (options_.mono_stereo_motion) return "metric (stereo visual motion)";
+  return "arbitrary (monocular)";
 }
 
 namespace {
@@ -134,6 +164,12 @@ SavedMap System::MapSnapshot() const {
 void System::SaveMap(const std::string& path) const {
   RefreshKeyframePoses();
   SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map());
+  if (std::count(keyframe_has_pose_.begin(), keyframe_has_pose_.end(), false) > 0) {
+    // Some keyframes have no pose (mono before its initialisation): write a copy without them.
+    map.keyframes = keyframes();
+    WriteMapFile(path, map);
+    return;
+  }
   // Lend the records to the writer (moved back even when writing throws).
   map.keyframes = std::move(keyframe_records_);
   try {

@@ -32,7 +32,9 @@ struct TrackResult {
   // the background (ba.background_solve, default), a keyframe's pose is the one before its
   // window solve; trajectory() gives every pose as later optimisation corrected it.
   Pose T_w_c = Pose::Identity();
-  bool valid = false;  // The estimator estimated this frame (false: extrapolated).
+  // The estimator estimated this frame (false: extrapolated, or no pose at all while a mono
+  // estimator initialises: status kInitializing).
+  bool valid = false;
   bool keyframe = false;
 };
 
@@ -48,6 +50,7 @@ struct FrameStats {
   int landmarks = 0;         // In the estimator's state.
   bool loop = false;         // The frontend recognised a place (measurement.loop).
   bool loop_closed = false;  // The estimator corrected the trajectory with it.
+  std::string note;  // The estimator's word on this frame ("initialising: <reason>"), if any.
   FrontendTimings frontend;
   double estimator_ms = 0;
   double total_ms = 0;
@@ -65,7 +68,8 @@ class System {
 
   TrackResult Track(const Frame& frame);
 
-  // Every frame tracked so far (estimates corrected by later optimisation).
+  // Every frame tracked so far that has a pose (estimates corrected by later optimisation);
+  // a mono run leaves out the frames before its initialisation (stats() says which).
   Trajectory trajectory() const { return estimator_->trajectory(); }
   std::vector<MapPoint> map() const { return estimator_->map(); }
   // Every keyframe so far (the frames the frontend chose), in order, with its current pose
@@ -83,6 +87,10 @@ class System {
   // not yet continue tracking inside a loaded map.
   static SavedMap LoadMap(const std::string& path);
   const SystemOptions& options() const { return options_; }
+  // What fixes the map's unit: "metric (stereo)", "metric (stereo visual motion)" (the mono EKF
+  // fed by the stereo motion) or "arbitrary (monocular)" (one camera: the unit is the first
+  // two-view baseline; align with Sim(3) to compare with a metric ground truth).
+  std::string ScaleDescription() const;
   const Estimator& estimator() const { return *estimator_; }
 
  private:
@@ -99,6 +107,7 @@ class System {
   // copying ~0.5 MB of descriptors per keyframe.
   mutable std::vector<SavedKeyframe> keyframe_records_;
   std::vector<size_t> keyframe_trajectory_index_;
+  mutable std::vector<bool> keyframe_has_pose_;  // By RefreshKeyframePoses.
   void RefreshKeyframePoses() const;
 };
 

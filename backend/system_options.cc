@@ -22,6 +22,8 @@ bool SystemOptions::IsValid(std::string* why) const {
     return fail("estimator must be 'ba' or 'ekf', not '" + estimator + "'");
   if (mode != "stereo" && mode != "mono")
     return fail("mode must be 'stereo' or 'mono', not '" + mode + "'");
+  if (mono_stereo_motion && !(mode == "mono" && estimator == "ekf"))
+    return fail("mono_stereo_motion is an option of the mono EKF (estimator=ekf, mode=mono)");
   return frontend.IsValid(why) && ba.IsValid(why) && ekf_stereo.IsValid(why) &&
          ekf_mono.IsValid(why);
 }
@@ -29,6 +31,7 @@ bool SystemOptions::IsValid(std::string* why) const {
 void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("", "estimator", &o->estimator);
   v->Field("", "mode", &o->mode);
+  v->Field("", "mono_stereo_motion", &o->mono_stereo_motion);
   HarrisOptions& h = o->frontend.harris;
   v->Field("harris", "sigma_d", &h.sigma_d);
   v->Field("harris", "sigma_i", &h.sigma_i);
@@ -130,6 +133,16 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "max_new_landmarks_per_keyframe", &b.max_new_landmarks_per_keyframe);
   v->Field("ba", "max_landmark_depth_m", &b.max_landmark_depth_m);
   v->Field("ba", "background_solve", &b.background_solve);
+  MonoInitializerOptions& mi = b.mono_init;
+  v->Field("mono_init", "min_points", &mi.two_view.min_points);
+  v->Field("mono_init", "min_parallax_deg", &mi.two_view.min_parallax_deg);
+  v->Field("mono_init", "min_point_parallax_deg", &mi.two_view.min_point_parallax_deg);
+  v->Field("mono_init", "min_cells", &mi.two_view.min_cells);
+  v->Field("mono_init", "homography_ratio", &mi.two_view.homography_ratio);
+  v->Field("mono_init", "sigma_px", &mi.two_view.sigma_px);
+  v->Field("mono_init", "min_reference_features", &mi.min_reference_features);
+  v->Field("mono_init", "max_pending_frames", &mi.max_pending_frames);
+  v->Field("mono_init", "refine", &mi.refine);
   StereoEkfOptions& es = o->ekf_stereo;
   v->Field("ekf_stereo", "max_landmarks", &es.max_landmarks);
   v->Field("ekf_stereo", "grid_cols", &es.grid_cols);

@@ -25,6 +25,11 @@ namespace dala {
 struct SystemOptions {
   std::string estimator = "ba";  // "ba" (sliding-window BA) or "ekf" (the paper's filters).
   std::string mode = "stereo";   // "stereo" or "mono".
+  // Mode "mono" means one camera: on a stereo dataset only the left images are read (the same
+  // run as on a left-only copy). true: the paper's setting instead (the mono EKF only): the
+  // frontend runs on the stereo pair and its visual motion is the filter's dead reckoning,
+  // which fixes the scale, while the filter observes left pixels only.
+  bool mono_stereo_motion = false;
   FrontendOptions frontend;
   SlidingWindowEstimatorOptions ba;
   StereoEkfOptions ekf_stereo;
@@ -36,7 +41,7 @@ struct SystemOptions {
 // Visits every settable option as (section, key, pointer). Sections: "" (top level), "harris",
 // "matcher" (tracking), "stereo", "motion", "keyframe", "frontend", "loop" (place recognition
 // and the BA's loop correction), "ba",
-// "ekf_stereo", "ekf_mono".
+// "ekf_stereo", "ekf_mono", "mono_init" (the monocular BA's two-view initialisation).
 class OptionVisitor {
  public:
   virtual ~OptionVisitor() = default;

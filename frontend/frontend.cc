@@ -264,11 +264,12 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   if (prev_) {
     motion = TrackFromPrevious(&cur, std::move(predicted_matches));
     if (motion) {
+      // Monocular: the essential matrix gives the direction, not the length: keep the previous
+      // step's length (read before the velocity is replaced; the first step has length 1).
+      const double previous_step = velocity_T_prev_cur_.translation().norm();
       velocity_T_prev_cur_ = motion->T_prev_cur;
       if (!motion->scale_known) {
-        // Monocular: keep the direction, with the previous step's length (unknown scale).
-        const double step = std::max(velocity_T_prev_cur_.translation().norm(), 1e-3);
-        velocity_T_prev_cur_.translation() = motion->T_prev_cur.translation() * step;
+        velocity_T_prev_cur_.translation() *= previous_step > 0 ? previous_step : 1.0;
       }
     }
     // Lost: assume the last velocity for this frame (the gap is flagged by the status).
@@ -313,6 +314,8 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
       evidence.median_parallax_px = parallax[parallax.size() / 2];
     }
     evidence.T_kf_cur = keyframe_->T_w_c.inverse() * cur.T_w_c;
+    // One camera: the dead-reckoned translation has no unit, so no criterion in metres.
+    if (!stereo) evidence.T_kf_cur.translation().setZero();
     out.tracked_fraction = evidence.tracked_fraction;
     out.is_keyframe = keyframe_policy_.IsKeyframe(evidence);
   }

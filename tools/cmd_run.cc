@@ -96,6 +96,7 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"landmarks", s.landmarks},
           {"loop", s.loop},
           {"loop_closed", s.loop_closed},
+          {"note", s.note},
           {"ms",
            {{"detect", s.frontend.detect_ms},
             {"stereo", s.frontend.stereo_ms},
@@ -147,6 +148,8 @@ int RunRun(const std::vector<std::string>& args) {
   dataset_options.calibration_yaml = FLAGS_calibration;
   dataset_options.first_frame = FLAGS_first_frame;
   dataset_options.max_frames = FLAGS_max_frames;
+  // Mode "mono" is one camera: the right images are not even read.
+  dataset_options.force_mono = options.mode == "mono" && !options.mono_stereo_motion;
   std::string why;
   if (!dataset_options.IsValid(&why)) throw Error() << why;
   std::unique_ptr<Dataset> dataset = OpenDataset(args[0], dataset_options);
@@ -155,7 +158,8 @@ int RunRun(const std::vector<std::string>& args) {
   System system(dataset->rig(), options);
   std::cerr << "[run] " << args[0] << " (" << DatasetFormatName(dataset->format()) << ", "
             << dataset->size() << " frames, " << (dataset->is_stereo() ? "stereo" : "mono")
-            << ") with " << options.estimator << "/" << options.mode << "\n";
+            << ") with " << options.estimator << "/" << options.mode << ", scale "
+            << system.ScaleDescription() << "\n";
   Progress progress(dataset->size(), FLAGS_progress);
   const auto start = std::chrono::steady_clock::now();
   Frame frame;
@@ -188,14 +192,17 @@ int RunRun(const std::vector<std::string>& args) {
 
   const auto& stats = system.stats();
   std::vector<double> total_ms;
-  int failures = 0, keyframes = 0, loops = 0, loops_closed = 0;
+  // Lost: frames the estimator could not estimate (extrapolated); initialising: frames a mono
+  // estimator saw before its map existed. The trajectory leaves out the frames without a pose.
+  int failures = 0, initialising = 0, keyframes = 0, loops = 0, loops_closed = 0;
   std::vector<double> loop_ms;  // Place recognition, per keyframe.
   for (const FrameStats& s : stats) {
     total_ms.push_back(s.total_ms);
     loops += s.loop;
     loops_closed += s.loop_closed;
     if (s.keyframe) loop_ms.push_back(s.frontend.loop_ms);
-    failures += s.status == TrackingStatus::kLost;
+    initialising += s.status == TrackingStatus::kInitializing && !s.valid;
+    failures += !s.valid && s.status != TrackingStatus::kInitializing;
     keyframes += s.keyframe;
   }
   nlohmann::json summary = {
@@ -207,6 +214,9 @@ int RunRun(const std::vector<std::string>& args) {
       {"ms_max", total_ms.empty() ? 0.0 : *std::max_element(total_ms.begin(), total_ms.end())},
       {"stages_ms", StageTable(stats)},
       {"tracking_failures", failures},
+      {"frames_initialising", initialising},
+      {"frames_with_pose", trajectory.size()},
+      {"scale", system.ScaleDescription()},
       {"keyframes", keyframes},
       {"loops_detected", loops},
       {"loops_closed", loops_closed},
@@ -242,8 +252,10 @@ int RunRun(const std::vector<std::string>& args) {
       {"summary", summary}};
   WriteFileAtomically(dir + "/report.json", [&](std::ostream& os) { os << report.dump(1) << "\n"; });
 
-  std::cout << "frames      " << stats.size() << " (" << failures << " lost, " << keyframes
+  std::cout << "frames      " << stats.size() << " (" << failures << " lost, " << initialising
+            << " initialising, " << trajectory.size() << " with a pose, " << keyframes
             << " keyframes, " << loops << " loops detected, " << loops_closed << " closed)\n"
+            << "scale       " << system.ScaleDescription() << "\n"
             << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
             << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {

@@ -94,6 +94,15 @@ void SlidingWindowBa::AddKeyframe(const BaKeyframe& kf) {
   InitializeStereoLandmarks(window_.back());
 }
 
+void SlidingWindowBa::AddObservation(KeyframeId id, const BaObservation& obs) {
+  for (KeyframeState& kf : window_) {
+    if (kf.id != id) continue;
+    kf.observations.push_back(obs);
+    return;
+  }
+  LOG(FATAL) << "AddObservation: keyframe " << id << " is not in the window";
+}
+
 void SlidingWindowBa::ApplyCorrection(const std::map<KeyframeId, Pose>& T_w_kf) {
   for (KeyframeState& kf : window_) {
     const auto it = T_w_kf.find(kf.id);

@@ -140,6 +140,11 @@ class SlidingWindowBa {
   // is marginalised (or dropped) first, at the current estimate. CHECKs that ids increase.
   void AddKeyframe(const BaKeyframe& kf);
 
+  // Adds an observation to a keyframe of the window (CHECK: it is in the window), e.g. the
+  // previous keyframe's observation of a landmark that a monocular estimator chose at the new
+  // keyframe, so that the two views triangulate it in the next Optimize.
+  void AddObservation(KeyframeId id, const BaObservation& obs);
+
   // Loop closure (a pose graph moved the keyframes): sets the window keyframes found in
   // `T_w_kf` to their corrected poses (the others are not in the window: ignored) and drops the
   // marginalisation prior, which was linearised at the old poses and held the old gauge (moving

@@ -1,0 +1,74 @@
+#ifndef DALA_BACKEND_MONO_MONO_INITIALIZER_H_
+#define DALA_BACKEND_MONO_MONO_INITIALIZER_H_
+
+// MonoInitializer: the start of every monocular estimator. It holds the frontend's measurements
+// from a reference frame on, and at each new frame tries the two-view initialisation
+// (backend/mono/two_view.h) between the reference and the new frame on the landmarks both
+// observe (the frontend's tracks carry the ids). Until it succeeds every frame is reported
+// "initialising: <reason>" and given no pose.
+//
+// The reference frame: the first frame with at least min_reference_features observations. It
+// is replaced by the current frame when fewer than two_view.min_points of its landmarks are
+// still tracked (the two-view test could never pass), or when it is older than
+// max_pending_frames (the motion stayed too small for too long); the frames before the new
+// reference then stay without a pose.
+//
+// On success: the reference frame (world frame = its camera), the frames in between (which the
+// estimator localises afterwards against the new map) and the current frame with
+// T_ref_cur (|t| = 1: the map's unit is this first baseline) and the triangulated landmarks
+// p_ref, refined by a two-view bundle adjustment (backend/mono/two_view_refinement.h).
+//
+// Not thread-safe; deterministic.
+
+#include <deque>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "backend/mono/two_view.h"
+#include "core/camera.h"
+#include "core/frame_measurement.h"
+
+namespace dala {
+
+struct MonoInitializerOptions {
+  TwoViewOptions two_view;
+  int min_reference_features = 100;
+  int max_pending_frames = 60;        // Reference older than this: a new reference.
+  bool refine = true;                 // Two-view BA of the accepted reconstruction.
+
+  bool IsValid(std::string* why) const;
+};
+
+struct MonoInitialization {
+  FrameMeasurement reference;
+  std::vector<FrameMeasurement> between;  // After the reference, before the current frame.
+  FrameMeasurement current;
+  Pose T_ref_cur = Pose::Identity();      // |translation| = 1.
+  std::map<LandmarkId, Eigen::Vector3d> p_ref;  // Landmarks in the reference camera.
+  TwoViewResult two_view;
+};
+
+class MonoInitializer {
+ public:
+  MonoInitializer(const PinholeCamera& camera, const MonoInitializerOptions& options);
+
+  // Feeds the next frame; returns the initialisation when it succeeds at this frame (the
+  // initializer is then spent: call Reset to start again). When it does not, reason() says why.
+  std::optional<MonoInitialization> Add(const FrameMeasurement& m);
+  // "no reference frame yet (N features < 100)", "too little parallax: ...", etc.
+  const std::string& reason() const { return reason_; }
+  void Reset();
+
+ private:
+  PinholeCamera camera_;
+  MonoInitializerOptions options_;
+  std::optional<FrameMeasurement> reference_;
+  std::vector<FrameMeasurement> between_;
+  std::string reason_;
+};
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_MONO_MONO_INITIALIZER_H_

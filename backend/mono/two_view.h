@@ -1,0 +1,86 @@
+#ifndef DALA_BACKEND_MONO_TWO_VIEW_H_
+#define DALA_BACKEND_MONO_TWO_VIEW_H_
+
+// Two-view initialisation of a monocular map: the relative pose of two views of one camera and
+// the 3D points of their correspondences, up to scale (the map's unit is this first baseline,
+// |t| = 1).
+//
+// Method (ORB-SLAM's model selection, Mur-Artal et al., T-RO 2015, section IV):
+//   1. Both models by seeded RANSAC (OpenCV): an essential matrix E (general scene) and a
+//      homography H (planar scene, or too little translation for the epipolar geometry).
+//   2. Each model is scored on ALL correspondences by its symmetric transfer error, with
+//      sigma = sigma_px:
+//        S_M = sum_i sum_{both images} rho_M(d_i^2 / sigma^2),
+//        rho_M(x) = Gamma - x  if x < T_M  else 0,   Gamma = T_H = 5.99 (chi2 2 dof, 95 %),
+//        T_E = 3.84 (chi2 1 dof, 95 %: the epipolar distance is one-dimensional),
+//      where d is the point-to-epipolar-line distance (E, via F = K^-T E K^-1) or the transfer
+//      distance |x' - H x| (H). Gamma is the same for both so that the scores compare.
+//      R_H = S_H / (S_H + S_E) > homography_ratio picks H (the paper's 0.45), else E.
+//   3. The pose: E -> the one of its four (R, t) with the most points in front (cv::recoverPose);
+//      H -> cv::decomposeHomographyMat (up to four solutions), the one with the most good points,
+//      refused when the second best has more than ambiguity_ratio as many (a plane seen from
+//      too little parallax: ambiguous).
+//   4. Triangulation of the model's inliers (cv::triangulatePoints); a point is good when it is
+//      in front of both cameras, reprojects within 2 sigma in both images and its rays meet at
+//      more than min_point_parallax_deg.
+//   5. Accepted only with min_points good points, a median parallax of at least
+//      min_parallax_deg (pure rotation and tiny motions fail here) and good points in at least
+//      min_cells cells of a 4x4 image grid (well spread). Otherwise `reason` says which test
+//      failed, with the measured value, e.g. "too little parallax: median 0.21 deg < 1 deg".
+//
+// Frames: x_ref is the reference view, x_cur the current one; T_cur_ref maps reference-camera
+// points into the current camera (p_cur = T_cur_ref p_ref), points come in the reference camera.
+// Deterministic: OpenCV's RANSAC generator is seeded from options.seed before each model.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/camera.h"
+#include "core/geometry.h"
+
+namespace dala {
+
+struct TwoViewOptions {
+  double sigma_px = 1.0;          // Pixel noise of the correspondences.
+  double ransac_confidence = 0.999;
+  int ransac_max_iterations = 1000;
+  uint64_t seed = 42;
+  double homography_ratio = 0.45;  // R_H above this selects the homography.
+  double ambiguity_ratio = 0.75;   // Homography: second best / best good points above => refused.
+  int min_points = 50;             // Good triangulated points.
+  double min_parallax_deg = 1.0;   // Median parallax of the good points.
+  double min_point_parallax_deg = 0.3;  // A point with less is not triangulated (near infinity).
+  int min_cells = 6;               // Of the 4x4 grid over the current image.
+
+  bool IsValid(std::string* why) const;
+};
+
+enum class TwoViewModel { kNone, kEssential, kHomography };
+const char* TwoViewModelName(TwoViewModel model);
+
+struct TwoViewResult {
+  bool ok = false;
+  std::string reason;  // Why not, when !ok.
+  TwoViewModel model = TwoViewModel::kNone;
+  double homography_score_ratio = 0.0;  // R_H.
+  Pose T_cur_ref = Pose::Identity();    // |translation| = 1 when ok.
+  // Per correspondence: the triangulated point in the reference camera, when good.
+  std::vector<std::optional<Eigen::Vector3d>> p_ref;
+  int num_inliers = 0;  // Of the chosen model's RANSAC.
+  int num_good = 0;     // Triangulated, in front, consistent.
+  double median_parallax_deg = 0.0;
+};
+
+// The camera must have no distortion (rectified pixels); uv_ref[i] <-> uv_cur[i].
+TwoViewResult InitializeTwoView(const PinholeCamera& camera,
+                                const std::vector<Eigen::Vector2d>& uv_ref,
+                                const std::vector<Eigen::Vector2d>& uv_cur,
+                                const TwoViewOptions& options);
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_MONO_TWO_VIEW_H_

@@ -1,0 +1,154 @@
+// Two-view initialisation (backend/mono/two_view.h) and its refinement, on exact synthetic
+// correspondences with pixel noise: general scenes (essential matrix), a plane (homography),
+// pure rotation and too little motion (refused with the reason).
+
+#include "backend/mono/two_view.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "backend/mono/two_view_refinement.h"
+
+namespace dala {
+namespace {
+
+PinholeCamera Camera() {
+  PinholeCamera c;
+  c.width = 752;
+  c.height = 480;
+  c.fx = c.fy = 450.0;
+  c.cx = 375.5;
+  c.cy = 239.5;
+  return c;
+}
+
+struct Views {
+  std::vector<Eigen::Vector2d> ref, cur;
+  std::vector<Eigen::Vector3d> p_ref;
+};
+
+// Points in front of the reference camera (depth 4..12 m, or on the plane z = 6 when planar),
+// seen from the reference and from T_cur_ref, with Gaussian pixel noise.
+Views Render(const Pose& T_cur_ref, bool planar, double noise_px, uint32_t seed, int n = 300) {
+  const PinholeCamera cam = Camera();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1),
+      z(4.0, 12.0);
+  std::normal_distribution<double> noise(0.0, noise_px);
+  Views out;
+  while (static_cast<int>(out.ref.size()) < n) {
+    const Eigen::Vector2d uv(u(rng), v(rng));
+    const Eigen::Vector3d p = cam.Unproject(uv) * (planar ? 6.0 : z(rng));
+    Eigen::Vector2d uv_cur;
+    if (!cam.Project(T_cur_ref * p, &uv_cur) || !cam.InImage(uv_cur)) continue;
+    out.ref.push_back(uv + Eigen::Vector2d(noise(rng), noise(rng)));
+    out.cur.push_back(uv_cur + Eigen::Vector2d(noise(rng), noise(rng)));
+    out.p_ref.push_back(p);
+  }
+  return out;
+}
+
+double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return LogSO3(a.transpose() * b).norm() * 180.0 / M_PI;
+}
+
+TEST(TwoView, GeneralSceneRecoversTheMotionUpToScale) {
+  const Pose T_cur_ref = MakePose(ExpSO3(Eigen::Vector3d(0.02, -0.08, 0.01)),
+                                  Eigen::Vector3d(-0.5, 0.05, -0.2));
+  const Views views = Render(T_cur_ref, false, 0.5, 1);
+  const TwoViewResult r = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_EQ(r.model, TwoViewModel::kEssential);
+  EXPECT_LT(r.homography_score_ratio, 0.45);
+  EXPECT_NEAR(r.T_cur_ref.translation().norm(), 1.0, 1e-9);
+  // RANSAC keeps a minimal-sample model: close, not exact.
+  EXPECT_LT(AngleDeg(r.T_cur_ref.linear(), T_cur_ref.linear()), 1.5);
+  EXPECT_GT(r.T_cur_ref.translation().dot(T_cur_ref.translation().normalized()),
+            std::cos(10.0 * M_PI / 180.0));
+  // The two-view BA makes it accurate (what MonoInitializer uses).
+  Pose T = r.T_cur_ref;
+  std::vector<std::optional<Eigen::Vector3d>> p_ref = r.p_ref;
+  ASSERT_TRUE(RefineTwoView(Camera(), views.ref, views.cur, 0.5, 20, &T, &p_ref).usable);
+  EXPECT_LT(AngleDeg(T.linear(), T_cur_ref.linear()), 0.1);
+  EXPECT_GT(T.translation().dot(T_cur_ref.translation().normalized()),
+            std::cos(1.0 * M_PI / 180.0));
+  // Points come at the scale of the unit baseline: true depth / true baseline.
+  const double scale = 1.0 / T_cur_ref.translation().norm();
+  std::vector<double> relative_error;
+  for (size_t i = 0; i < views.p_ref.size(); ++i) {
+    if (!p_ref[i]) continue;
+    relative_error.push_back(std::abs(p_ref[i]->z() / (views.p_ref[i].z() * scale) - 1.0));
+  }
+  ASSERT_GT(relative_error.size(), 200u);
+  std::nth_element(relative_error.begin(), relative_error.begin() + relative_error.size() / 2,
+                   relative_error.end());
+  EXPECT_LT(relative_error[relative_error.size() / 2], 0.03);
+}
+
+TEST(TwoView, RefinementReducesTheErrorAndKeepsTheUnitBaseline) {
+  const Pose T_cur_ref = MakePose(ExpSO3(Eigen::Vector3d(0.0, 0.1, 0.0)),
+                                  Eigen::Vector3d(-0.6, 0.0, -0.1));
+  const Views views = Render(T_cur_ref, false, 1.0, 2);
+  const TwoViewResult r = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  Pose T = r.T_cur_ref;
+  std::vector<std::optional<Eigen::Vector3d>> p = r.p_ref;
+  const TwoViewRefinementSummary s = RefineTwoView(Camera(), views.ref, views.cur, 1.0, 20, &T, &p);
+  ASSERT_TRUE(s.usable);
+  EXPECT_LE(s.final_cost, s.initial_cost);
+  EXPECT_NEAR(T.translation().norm(), 1.0, 1e-9);
+  const Eigen::Vector3d t_true = T_cur_ref.translation().normalized();
+  EXPECT_LE(std::acos(std::min(1.0, T.translation().dot(t_true))),
+            std::acos(std::min(1.0, r.T_cur_ref.translation().dot(t_true))) + 1e-3);
+  EXPECT_LT(AngleDeg(T.linear(), T_cur_ref.linear()),
+            AngleDeg(r.T_cur_ref.linear(), T_cur_ref.linear()) + 0.02);
+  EXPECT_LT(AngleDeg(T.linear(), T_cur_ref.linear()), 0.5);
+}
+
+TEST(TwoView, PlaneIsReconstructedFromTheHomography) {
+  const Pose T_cur_ref = MakePose(ExpSO3(Eigen::Vector3d(0.0, 0.05, 0.0)),
+                                  Eigen::Vector3d(-0.8, 0.0, 0.0));
+  const Views views = Render(T_cur_ref, true, 0.5, 3);
+  const TwoViewResult r = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_EQ(r.model, TwoViewModel::kHomography);
+  EXPECT_GT(r.homography_score_ratio, 0.45);
+  EXPECT_LT(AngleDeg(r.T_cur_ref.linear(), T_cur_ref.linear()), 0.5);
+  EXPECT_GT(r.T_cur_ref.translation().dot(T_cur_ref.translation().normalized()),
+            std::cos(3.0 * M_PI / 180.0));
+}
+
+TEST(TwoView, PureRotationIsRefusedForLackOfParallax) {
+  const Pose T_cur_ref = MakePose(ExpSO3(Eigen::Vector3d(0.0, 0.15, 0.02)), Eigen::Vector3d::Zero());
+  const Views views = Render(T_cur_ref, false, 0.5, 4);
+  const TwoViewResult r = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.reason.find("parallax"), std::string::npos) << r.reason;
+}
+
+TEST(TwoView, TooFewCorrespondencesAreRefusedWithTheCount) {
+  const Views views = Render(MakePose(Eigen::Matrix3d::Identity(), Eigen::Vector3d(1, 0, 0)),
+                             false, 0.5, 5, 20);
+  const TwoViewResult r = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.reason, "too few correspondences: 20 < 50");
+}
+
+TEST(TwoView, DeterministicForTheSameSeed) {
+  const Pose T_cur_ref = MakePose(ExpSO3(Eigen::Vector3d(0.01, 0.05, 0.0)),
+                                  Eigen::Vector3d(-0.5, 0.1, -0.3));
+  Views views = Render(T_cur_ref, false, 1.0, 6);
+  for (size_t i = 0; i < views.cur.size(); i += 5) views.cur[i] += Eigen::Vector2d(40, -25);
+  const TwoViewResult a = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+  const TwoViewResult b = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+  ASSERT_TRUE(a.ok) << a.reason;
+  EXPECT_TRUE(a.T_cur_ref.matrix() == b.T_cur_ref.matrix());
+  EXPECT_EQ(a.num_good, b.num_good);
+  // The outliers (every fifth correspondence) are not triangulated.
+  for (size_t i = 0; i < views.cur.size(); i += 5) EXPECT_FALSE(a.p_ref[i].has_value());
+}
+
+}  // namespace
+}  // namespace dala
