@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -39,6 +40,9 @@ struct EstimatorOutput {
   // holds it) and `note` says why ("initialising: too little parallax: ...").
   bool initializing = false;
   std::string note;
+  // The landmarks the estimator holds now (world points), which the frontend searches for in
+  // the next frame (frontend/local_map_search.h); empty when the estimator offers none.
+  std::vector<std::pair<LandmarkId, Eigen::Vector3d>> local_map;
   int landmarks_in_state = 0;  // Landmarks currently estimated (window / filter state).
   bool loop_closed = false;    // A loop closure corrected the trajectory at this frame.
 };

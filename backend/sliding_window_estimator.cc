@@ -222,6 +222,13 @@ void SlidingWindowEstimator::SolveWindow(KeyframeId id) {
   for (const KeyframeId k : ba_.WindowKeyframes()) keyframe_poses_[k] = *ba_.KeyframePose(k);
 }
 
+void SlidingWindowEstimator::ReportLandmarks(EstimatorOutput* out) const {
+  // Called while no window solve runs: the window's landmarks at their current estimates.
+  const std::map<LandmarkId, Eigen::Vector3d> landmarks = ba_.Landmarks();
+  out->landmarks_in_state = static_cast<int>(landmarks.size());
+  out->local_map.assign(landmarks.begin(), landmarks.end());
+}
+
 Pose SlidingWindowEstimator::PredictPose(const FrameMeasurement& m) const {
   Pose velocity = velocity_;
   if (m.motion) {
@@ -248,7 +255,7 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
   initializer_.reset();
   out.valid = true;
   out.T_w_c = T_w_prev_;
-  out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
+  ReportLandmarks(&out);
   std::ostringstream note;
   note.precision(3);
   note << "initialised from frame " << init->reference.frame << " (" << init->p_ref.size()
@@ -335,9 +342,16 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     }
     // Pose-only tracking against the window (a keyframe: before it joins the window).
     const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(m), T_w_c, options_.pose_only);
+    VLOG(2) << "frame " << m.frame << ": pose-only " << PoseOnlyStatusName(r.status) << ", "
+            << r.num_inliers << " inliers of " << WindowObservations(m).size()
+            << " mapped observations";
     if (r.status == PoseOnlyStatus::kOk) {
       T_w_c = r.T_w_c;
       out.valid = true;
+    } else {
+      VLOG(1) << "frame " << m.frame << ": pose-only tracking failed ("
+              << PoseOnlyStatusName(r.status) << ", " << r.num_inliers << " inliers of "
+              << WindowObservations(m).size() << " observations of mapped landmarks)";
     }
   }
   // A mono keyframe needs a tracked pose (see the class comment).
@@ -358,7 +372,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
         last_keyframe_observations_[o.landmark] = ToBa(o);
       }
     }
-    out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
+    ReportLandmarks(&out);
     if (options_.background_solve) {
       solved_in_background_ = kf.id;
       solver_.Start([this, id = kf.id] { SolveWindow(id); });
@@ -369,7 +383,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   } else {
     const KeyframeId ref(num_keyframes_ - 1);
     frames_.push_back({m.t_ns, ref, KeyframePoseNow(ref).inverse() * T_w_c});
-    out.landmarks_in_state = static_cast<int>(ba_.Landmarks().size());
+    ReportLandmarks(&out);
   }
   if (!stereo && out.valid) velocity_ = T_w_prev_.inverse() * T_w_c;
   T_w_prev_ = T_w_c;

@@ -152,6 +152,8 @@ class SlidingWindowEstimator : public Estimator {
   void StartMonoMap(const MonoInitialization& init);
   // The initial guess of the current frame's pose (see the class comment).
   Pose PredictPose(const FrameMeasurement& m) const;
+  // landmarks_in_state and local_map of `out` from the window.
+  void ReportLandmarks(EstimatorOutput* out) const;
   Pose KeyframePoseNow(KeyframeId id) const;
   std::vector<BaObservation> SelectKeyframeObservations(const FrameMeasurement& m,
                                                         const Pose& T_w_c);

@@ -56,7 +56,11 @@ TrackResult System::Track(const Frame& frame) {
   const auto t0 = Clock::now();
   const FrameMeasurement m = frontend_->Process(frame);
   const auto t1 = Clock::now();
-  const EstimatorOutput e = estimator_->Add(m);
+  EstimatorOutput e = estimator_->Add(m);
+  const LocalMapSearchOptions& search = options_.frontend.local_map;
+  if (e.valid && !e.local_map.empty() && search.enable && (!rig_.is_stereo() || search.stereo)) {
+    frontend_->SetLocalMap({frame.id, e.T_w_c, std::move(e.local_map)});
+  }
   const auto t2 = Clock::now();
 
   FrameStats s;

@@ -77,6 +77,10 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("frontend", "match_keyframe", &f.match_keyframe);
   v->Field("frontend", "keyframe_gate_px", &f.keyframe_gate_px);
   v->Field("frontend", "parallel_detection", &f.parallel_detection);
+  v->Field("frontend", "local_map_search", &f.local_map.enable);
+  v->Field("frontend", "local_map_search_stereo", &f.local_map.stereo);
+  v->Field("frontend", "local_map_radius_px", &f.local_map.radius_px);
+  v->Field("frontend", "local_map_forget_after_frames", &f.local_map.forget_after_frames);
   PlaceRecognitionOptions& l = o->frontend.loop;
   v->Field("loop", "enable", &l.enable);
   v->Field("loop", "min_frame_gap", &l.min_frame_gap);
@@ -103,6 +107,8 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   SlidingWindowEstimatorOptions& b = o->ba;
   v->Field("ba", "window_size", &b.ba.window_size);
   v->Field("ba", "use_marginalization", &b.ba.use_marginalization);
+  v->Field("ba", "num_fixed_keyframes", &b.ba.num_fixed_keyframes);
+  v->Field("ba", "min_triangulation_parallax_deg", &b.ba.min_triangulation_parallax_deg);
   // The enum as a name, both ways from one table.
   using Exit = SlidingWindowBa::LandmarkExit;
   static const std::pair<const char*, Exit> kExitNames[] = {

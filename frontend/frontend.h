@@ -13,7 +13,8 @@
 // inherits the landmark id of its previous-frame match when that match is an inlier of the
 // motion (or, without depth, when it lies within `epipolar_gate_px` of its epipolar line);
 // points without an inherited id are matched to the last keyframe (re-acquiring landmarks
-// lost for a few frames), and the rest start new landmarks.
+// lost for a few frames), then to the estimator's local map when the System gave one
+// (frontend/local_map_search.h), and the rest start new landmarks.
 //
 // Loop detection (stereo, options.loop.enable): every keyframe is searched for in the keyframe
 // database (frontend/place_recognition.h) and then added to it. On a verified loop the
@@ -39,6 +40,7 @@
 #include "core/types.h"
 #include "frontend/harris.h"
 #include "frontend/keyframe_policy.h"
+#include "frontend/local_map_search.h"
 #include "frontend/matcher.h"
 #include "frontend/motion_estimator.h"
 #include "frontend/place_recognition.h"
@@ -72,6 +74,9 @@ struct FrontendOptions {
   // Loop detection at keyframes (stereo): place recognition + relabelling of the recognised
   // landmarks with their old ids (frontend/place_recognition.h).
   PlaceRecognitionOptions loop;
+  // Guided search of the estimator's local map (frontend/local_map_search.h), when the System
+  // hands one over (SetLocalMap).
+  LocalMapSearchOptions local_map;
 
   bool IsValid(std::string* why) const;
 };
@@ -90,6 +95,9 @@ class Frontend {
   const Pose& dead_reckoning_T_w_c() const { return T_w_cur_; }
 
   const StereoRig& rig() const { return rig_; }
+  // The estimator's landmarks after the frame just processed (see local_map_search.h): the next
+  // frame searches them around their predicted projections.
+  void SetLocalMap(LocalMap map) { local_map_search_.SetLocalMap(std::move(map)); }
   // The keyframe database and the last search's statistics.
   const PlaceRecognition& place_recognition() const { return place_recognition_; }
   PlaceRecognition* mutable_place_recognition() { return &place_recognition_; }
@@ -116,8 +124,10 @@ class Frontend {
   };
 
   // Matches prev -> cur around the predicted positions; empty prediction = no prior.
-  std::vector<Match> MatchTemporal(const TrackedFrame& from, const DetectedImage& cur,
-                                   const Pose* T_from_cur) const;
+  // `p_from`: the points of `from` in its camera when known (default: its stereo points).
+  std::vector<Match> MatchTemporal(
+      const TrackedFrame& from, const DetectedImage& cur, const Pose* T_from_cur,
+      const std::vector<std::optional<Eigen::Vector3d>>* p_from = nullptr) const;
   // Inherits ids from `prev` through the motion inliers; returns the motion, if any.
   // `predicted_matches`: the first attempt's MatchTemporal result when already computed.
   std::optional<MotionEstimate> TrackFromPrevious(
@@ -131,6 +141,7 @@ class Frontend {
   MotionEstimator motion_estimator_;
   KeyframePolicy keyframe_policy_;
   PlaceRecognition place_recognition_;
+  LocalMapSearch local_map_search_;
   WorkerThread detection_worker_;  // Detects the right image (persistent: keeps its scratch).
   std::optional<TrackedFrame> prev_;
   std::optional<TrackedFrame> keyframe_;

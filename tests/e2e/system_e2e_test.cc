@@ -76,13 +76,15 @@ TEST(SystemE2e, BackgroundWindowSolveGivesTheSameTrajectory) {
 }
 
 // The paper's filters on the same measurements: stereo EKF, and the bearing-only mono EKF whose
-// scale comes from the stereo visual motion (dead reckoning, as on the paper's robots).
+// scale comes from the stereo visual motion (dead reckoning, as on the paper's robots:
+// mono_stereo_motion).
 TEST(SystemE2e, RoverStretchEkfStereoAndMono) {
   const sim::SyntheticSequence seq(RoverStretch(100, 7));
   for (const char* mode : {"stereo", "mono"}) {
     SystemOptions options;
     options.estimator = "ekf";
     options.mode = mode;
+    options.mono_stereo_motion = options.mode == "mono";
     const SystemRun run = RunSystem(seq, options);
     ASSERT_TRUE(run.eval.ok) << run.eval.error;
     EXPECT_EQ(run.trajectory.size(), seq.size());
@@ -101,11 +103,14 @@ TEST(SystemE2e, UnsupportedCombinationIsAClearError) {
   SystemOptions options;
   options.estimator = "ba";
   options.mode = "mono";
+  options.mono_stereo_motion = true;  // An option of the mono EKF only.
   try {
     System system(seq.rig(), options);
-    ADD_FAILURE() << "ba/mono should be refused";
+    ADD_FAILURE() << "ba/mono with mono_stereo_motion should be refused";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("not supported"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("mono_stereo_motion is an option of the mono EKF"),
+              std::string::npos)
+        << e.what();
   }
 }
 

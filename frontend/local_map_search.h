@@ -1,0 +1,120 @@
+#ifndef DALA_FRONTEND_LOCAL_MAP_SEARCH_H_
+#define DALA_FRONTEND_LOCAL_MAP_SEARCH_H_
+
+// Guided search of the estimator's local map in the current image (ORB-SLAM's "track the local
+// map"): the landmarks the estimator currently estimates are projected into the current frame
+// from a predicted pose, and the robust matcher looks for each one's last appearance (the patch
+// descriptor of the last frame that observed it) within `radius_px` of its projection. A current
+// point that got no landmark id from the frame-to-frame tracking or the keyframe
+// re-acquisition takes the id of the landmark it matches, so a physical point keeps ONE id even
+// when its track broke for a few frames (occlusion, a missed detection, a point that moved too
+// far for the constant-velocity prediction): the estimator sees long tracks instead of many
+// short ones, which is what holds a monocular map's scale.
+//
+// The frontend still knows no estimator (DESIGN.md): the System hands it a LocalMap, a plain
+// list of world points with the pose of the frame they were estimated at, after each frame.
+//
+// Prediction of the current camera: T_w_cur = T_w_prev * V, with T_w_prev the estimator's pose
+// of the previous frame and V the velocity of the estimator's last two poses; when the frontend
+// estimated this frame's visual motion, its rotation replaces V's (and, with stereo, its metric
+// translation too). Descriptors are kept per landmark id for the frames that observed it, and
+// forgotten when a landmark is neither in the local map nor seen for `forget_after_frames`.
+//
+// Not thread-safe; deterministic (ordered containers).
+
+#include <map>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/camera.h"
+#include "core/geometry.h"
+#include "core/types.h"
+#include "frontend/harris.h"
+#include "frontend/matcher.h"
+
+namespace dala {
+
+// What the System hands the frontend after each frame: the estimator's current landmarks and
+// the frame's estimated pose.
+struct LocalMap {
+  FrameId frame;                   // The frame the estimate belongs to.
+  Pose T_w_c = Pose::Identity();   // Its estimated pose.
+  std::vector<std::pair<LandmarkId, Eigen::Vector3d>> points;  // p_w.
+};
+
+struct LocalMapSearchOptions {
+  bool enable = true;
+  // Stereo runs too. Off by default: the stereo results (docs/results.md) were measured
+  // without it, and its effect on them has not been measured yet.
+  bool stereo = false;
+  double radius_px = 15.0;       // Search radius around each projection.
+  int forget_after_frames = 30;  // Descriptors of landmarks unseen that long (and not mapped).
+
+  bool IsValid(std::string* why) const;
+};
+
+class LocalMapSearch {
+ public:
+  LocalMapSearch(const PinholeCamera& camera, const LocalMapSearchOptions& options,
+                 const MatcherOptions& matcher);
+
+  // The estimator's map after frame `map.frame` (replaces the previous one).
+  void SetLocalMap(LocalMap map);
+
+  // Assigns landmark ids to the points of `cur` (detections of frame `frame`) that have none
+  // (landmark[i] invalid) and match a local-map landmark not yet present in `landmark`.
+  // `previous_frame` is the frame processed before this one, `T_prev_cur` its visual motion when
+  // estimated (`metric`: with its scale). Returns the number of points given an id.
+  int Search(FrameId previous_frame, const std::optional<Pose>& T_prev_cur, bool metric,
+             const DetectedImage& cur, std::vector<LandmarkId>* landmark,
+             std::vector<int>* track_length) const;
+
+  // Mono prediction of the frame-to-frame tracking: the points of the previous frame
+  // (`previous_frame`, its detections' landmark ids `landmark`) placed in its camera by the
+  // estimator's map: a mapped landmark at its estimate, any other point on its ray at the median
+  // depth of the mapped ones (a scene-depth guess, so that forward motion is predicted too); and
+  // the estimator's velocity T_prev_cur, in the map's unit. nullopt without a map of that frame
+  // or with fewer than min_points mapped points in view.
+  struct Prediction {
+    Pose T_prev_cur = Pose::Identity();
+    std::vector<std::optional<Eigen::Vector3d>> p_prev;  // Previous camera frame.
+  };
+  std::optional<Prediction> PredictFromMap(FrameId previous_frame,
+                                           const std::vector<LandmarkId>& landmark,
+                                           const DetectedImage& previous,
+                                           int min_points = 8) const;
+
+  bool has_map() const { return options_.enable && map_.has_value(); }
+  // The landmark is in the last local map.
+  bool IsMapped(LandmarkId id) const { return point_of_.count(id) > 0; }
+
+  // Remembers the appearance of every point of frame `frame` that has a landmark id.
+  void Remember(FrameId frame, const DetectedImage& detection,
+                const std::vector<LandmarkId>& landmark, const std::vector<int>& track_length);
+
+ private:
+  struct Appearance {
+    InterestPoint point;
+    std::vector<float> descriptor;
+    int track_length = 1;
+    int64_t last_seen = 0;  // Frame id value.
+  };
+
+  PinholeCamera camera_;
+  LocalMapSearchOptions options_;
+  MatcherOptions matcher_;
+  std::optional<LocalMap> map_;
+  std::unordered_map<LandmarkId, Eigen::Vector3d> point_of_;  // map_'s points by id.
+  Pose velocity_ = Pose::Identity();  // T_prev_cur of the estimator's last two poses.
+  std::optional<std::pair<FrameId, Pose>> previous_estimate_;
+  std::map<LandmarkId, Appearance> appearance_;
+};
+
+}  // namespace dala
+
+#endif  // DALA_FRONTEND_LOCAL_MAP_SEARCH_H_
