@@ -3,6 +3,10 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <cmath>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <sstream>
 
 namespace dala {
@@ -222,6 +226,51 @@ void SlidingWindowEstimator::SolveWindow(KeyframeId id) {
   for (const KeyframeId k : ba_.WindowKeyframes()) keyframe_poses_[k] = *ba_.KeyframePose(k);
 }
 
+std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& m) const {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  std::vector<BaObservation> observations;
+  for (const FeatureObservation& o : m.observations) {
+    const std::optional<Eigen::Vector3d> p_w = ba_.LandmarkPosition(o.landmark);
+    if (!p_w) continue;
+    object.emplace_back(p_w->x(), p_w->y(), p_w->z());
+    image.emplace_back(o.uv.x(), o.uv.y());
+    observations.push_back(ToBa(o));
+  }
+  const int min_inliers = 2 * options_.pose_only.min_inliers;
+  if (static_cast<int>(object.size()) < min_inliers) return std::nullopt;
+  cv::Mat K;
+  cv::eigen2cv(rig_.left.K(), K);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  cv::theRNG().state = options_.recovery_seed;
+  // Threshold: the chi-square 95 % bound of a 1-pixel observation (2 dof), as the BA's test.
+  const bool found = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200,
+                                        std::sqrt(kChi2Quantile95Dof2), 0.999, inliers,
+                                        cv::SOLVEPNP_EPNP);
+  if (!found || static_cast<int>(inliers.size()) < min_inliers) {
+    VLOG(1) << "frame " << m.frame << ": PnP recovery failed (" << inliers.size() << " inliers of "
+            << object.size() << ")";
+    return std::nullopt;
+  }
+  cv::Mat R_cv;
+  cv::Rodrigues(rvec, R_cv);
+  Eigen::Matrix3d R_c_w;
+  Eigen::Vector3d t_c_w;
+  cv::cv2eigen(R_cv, R_c_w);
+  cv::cv2eigen(tvec, t_c_w);
+  const Pose guess = MakePose(R_c_w, t_c_w).inverse();
+  // Refined over every known landmark (the window's and older ones), outliers rejected.
+  const PoseOnlyResult r = EstimatePoseOnly(
+      IntrinsicsOf(rig_), observations,
+      [&](LandmarkId id) { return ba_.LandmarkPosition(id); }, guess, options_.pose_only);
+  VLOG(1) << "frame " << m.frame << ": PnP recovery " << inliers.size() << " inliers of "
+          << object.size() << ", pose-only " << PoseOnlyStatusName(r.status) << " ("
+          << r.num_inliers << " inliers)";
+  if (r.status != PoseOnlyStatus::kOk || r.num_inliers < min_inliers) return std::nullopt;
+  return r.T_w_c;
+}
+
 void SlidingWindowEstimator::ReportLandmarks(EstimatorOutput* out) const {
   // Called while no window solve runs: the window's landmarks at their current estimates.
   const std::map<LandmarkId, Eigen::Vector3d> landmarks = ba_.Landmarks();
@@ -352,6 +401,12 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
       VLOG(1) << "frame " << m.frame << ": pose-only tracking failed ("
               << PoseOnlyStatusName(r.status) << ", " << r.num_inliers << " inliers of "
               << WindowObservations(m).size() << " observations of mapped landmarks)";
+    }
+  }
+  if (!stereo && !out.valid && !first) {
+    if (const std::optional<Pose> recovered = RecoverPose(m)) {
+      T_w_c = *recovered;
+      out.valid = true;
     }
   }
   // A mono keyframe needs a tracked pose (see the class comment).

@@ -116,6 +116,7 @@ struct SlidingWindowEstimatorOptions {
   BaLoopClosureOptions loop;
   bool background_solve = true;  // see the class comment.
   MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
+  uint64_t recovery_seed = 42;        // Of the mono PnP recovery's RANSAC.
 
   bool IsValid(std::string* why) const;
 };
@@ -152,6 +153,10 @@ class SlidingWindowEstimator : public Estimator {
   void StartMonoMap(const MonoInitialization& init);
   // The initial guess of the current frame's pose (see the class comment).
   Pose PredictPose(const FrameMeasurement& m) const;
+  // Mono: when pose-only tracking from the predicted pose fails, the pose from every observation
+  // of a landmark with a position (the window's and older ones: relocalisation in the map) by
+  // RANSAC PnP (OpenCV EPnP, seeded), then pose-only over them; nullopt if too few agree.
+  std::optional<Pose> RecoverPose(const FrameMeasurement& m) const;
   // landmarks_in_state and local_map of `out` from the window.
   void ReportLandmarks(EstimatorOutput* out) const;
   Pose KeyframePoseNow(KeyframeId id) const;

@@ -58,8 +58,8 @@ TrackResult System::Track(const Frame& frame) {
   const auto t1 = Clock::now();
   EstimatorOutput e = estimator_->Add(m);
   const LocalMapSearchOptions& search = options_.frontend.local_map;
-  if (e.valid && !e.local_map.empty() && search.enable && (!rig_.is_stereo() || search.stereo)) {
-    frontend_->SetLocalMap({frame.id, e.T_w_c, std::move(e.local_map)});
+  if (!e.local_map.empty() && search.enable && (!rig_.is_stereo() || search.stereo)) {
+    frontend_->SetLocalMap({frame.id, e.T_w_c, e.valid, std::move(e.local_map)});
   }
   const auto t2 = Clock::now();
 

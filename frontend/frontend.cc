@@ -115,21 +115,21 @@ std::optional<MotionEstimate> Frontend::TrackFromPrevious(
     from_map = local_map_search_.PredictFromMap(prev.id, prev.landmark, prev.detection);
     if (from_map) prediction = from_map->T_prev_cur;
   }
-  std::optional<MotionResult> motion;
-  std::vector<Match> matches;
-  std::vector<int> corr_match;  // Correspondence -> index in matches.
-  for (int attempt = 0; attempt < 2 && !motion; ++attempt) {
-    if (attempt == 0 && predicted_matches) {
-      matches = std::move(*predicted_matches);
-    } else {
-      matches = MatchTemporal(prev, cur->detection, attempt == 0 ? &prediction : nullptr,
-                              from_map ? &from_map->p_prev : nullptr);
-    }
-    corr_match.clear();
+  // One attempt: matches (around the prediction, or without a prior) and the motion.
+  struct Attempt {
+    std::vector<Match> matches;
+    std::vector<int> corr_match;  // Correspondence -> index in matches.
+    std::optional<MotionResult> motion;
+  };
+  const auto attempt_with = [&](const Pose* prior, std::optional<std::vector<Match>> given) {
+    Attempt a;
+    a.matches = given ? std::move(*given)
+                      : MatchTemporal(prev, cur->detection, prior,
+                                      from_map ? &from_map->p_prev : nullptr);
     if (rig_.is_stereo()) {
       std::vector<MotionCorrespondence> corrs;
-      for (size_t k = 0; k < matches.size(); ++k) {
-        const Match& m = matches[k];
+      for (size_t k = 0; k < a.matches.size(); ++k) {
+        const Match& m = a.matches[k];
         if (!prev.stereo[m.i]) continue;
         MotionCorrespondence c;
         c.p_prev = prev.stereo[m.i]->p_c0;
@@ -137,19 +137,40 @@ std::optional<MotionEstimate> Frontend::TrackFromPrevious(
         c.uv_cur = cur->detection.points[m.j].uv;
         if (cur->stereo[m.j]) c.u_right_cur = cur->stereo[m.j]->u_right;
         corrs.push_back(c);
-        corr_match.push_back(static_cast<int>(k));
+        a.corr_match.push_back(static_cast<int>(k));
       }
-      motion = motion_estimator_.Estimate3D2D(corrs, &prediction);
+      a.motion = motion_estimator_.Estimate3D2D(corrs, &prediction);
     } else {
       std::vector<Eigen::Vector2d> uv_prev, uv_cur;
-      for (size_t k = 0; k < matches.size(); ++k) {
-        uv_prev.push_back(prev.detection.points[matches[k].i].uv);
-        uv_cur.push_back(cur->detection.points[matches[k].j].uv);
-        corr_match.push_back(static_cast<int>(k));
+      for (size_t k = 0; k < a.matches.size(); ++k) {
+        uv_prev.push_back(prev.detection.points[a.matches[k].i].uv);
+        uv_cur.push_back(cur->detection.points[a.matches[k].j].uv);
+        a.corr_match.push_back(static_cast<int>(k));
       }
-      motion = motion_estimator_.EstimateEssential(uv_prev, uv_cur);
+      a.motion = motion_estimator_.EstimateEssential(uv_prev, uv_cur);
+    }
+    return a;
+  };
+  Attempt best = attempt_with(&prediction, std::move(predicted_matches));
+  if (!best.motion) {
+    // A jerk: matching without a prior, as for a loop closure.
+    best = attempt_with(nullptr, std::nullopt);
+  } else if (from_map && best.motion->estimate.inliers < from_map->num_mapped / 2) {
+    // One camera: the map-predicted matches keep less than half of the mapped points (a turn
+    // the constant velocity did not foresee): try without a prior, keep the better.
+    Attempt unconstrained = attempt_with(nullptr, std::nullopt);
+    if (unconstrained.motion &&
+        unconstrained.motion->estimate.inliers > best.motion->estimate.inliers) {
+      best = std::move(unconstrained);
     }
   }
+  const std::vector<Match>& matches = best.matches;
+  const std::vector<int>& corr_match = best.corr_match;
+  std::optional<MotionResult>& motion = best.motion;
+  VLOG(2) << "frame " << cur->id << ": " << matches.size() << " temporal matches, "
+          << (motion ? std::to_string(motion->estimate.inliers) + " motion inliers"
+                     : std::string("no motion"))
+          << (from_map ? " (map-predicted)" : "");
   if (!motion) return std::nullopt;
 
   // Ids through the motion's inliers, then the depth-less matches through the epipolar gate.
@@ -203,6 +224,29 @@ void Frontend::ReacquireFromKeyframe(TrackedFrame* cur) const {
   }
 }
 
+void Frontend::RelocalizeFromKeyframe(TrackedFrame* cur) const {
+  // No pose to predict with: the matcher's group constraints alone (any rotation), and only
+  // the landmarks the estimator maps, which it verifies (RANSAC PnP) before using them.
+  std::unordered_set<LandmarkId> present;
+  for (const LandmarkId& id : cur->landmark) {
+    if (id.valid()) present.insert(id);
+  }
+  int assigned = 0;
+  const TrackedFrame& kf = *tracked_keyframe_;
+  for (const Match& m : MatchTemporal(kf, cur->detection, nullptr)) {
+    const LandmarkId id = kf.landmark[m.i];
+    if (cur->landmark[m.j].valid() || !local_map_search_.IsMapped(id) || present.count(id)) {
+      continue;
+    }
+    cur->landmark[m.j] = id;
+    cur->track_length[m.j] = kf.track_length[m.i] + 1;
+    present.insert(id);
+    ++assigned;
+  }
+  VLOG(1) << "frame " << cur->id << ": lost before; " << assigned
+          << " mapped landmarks of keyframe " << kf.id << " found again";
+}
+
 std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame, TrackedFrame* cur) {
   KeyframeEntry entry =
       place_recognition_.MakeEntry(frame.id, frame.t_ns, cur->T_w_c, path_length_m_, frame.left,
@@ -236,6 +280,12 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   out.frame = frame.id;
   out.t_ns = frame.t_ns;
   out.stereo = stereo;
+
+  // The last keyframe the estimator tracked: what a lost frame is relocalised against.
+  if (keyframe_ && prev_ && keyframe_->id == prev_->id && local_map_search_.has_map() &&
+      !local_map_search_.LostAt(prev_->id)) {
+    tracked_keyframe_ = keyframe_;
+  }
 
   // 1. Interest points, both images at once.
   TrackedFrame cur;
@@ -300,8 +350,11 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   if (prev_) {
     std::optional<Pose> T_prev_cur;
     if (motion) T_prev_cur = motion->T_prev_cur;
-    local_map_search_.Search(prev_->id, T_prev_cur, motion && motion->scale_known, cur.detection,
-                             &cur.landmark, &cur.track_length);
+    const int found = local_map_search_.Search(prev_->id, T_prev_cur,
+                                               motion && motion->scale_known, cur.detection,
+                                               &cur.landmark, &cur.track_length);
+    VLOG(2) << "frame " << frame.id << ": " << found << " points found in the local map";
+    if (tracked_keyframe_ && local_map_search_.LostAt(prev_->id)) RelocalizeFromKeyframe(&cur);
   }
   for (size_t i = 0; i < n; ++i) {
     if (!cur.landmark[i].valid()) cur.landmark[i] = LandmarkId(next_landmark_++);

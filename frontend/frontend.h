@@ -133,6 +133,9 @@ class Frontend {
   std::optional<MotionEstimate> TrackFromPrevious(
       TrackedFrame* cur, std::optional<std::vector<Match>> predicted_matches = std::nullopt);
   void ReacquireFromKeyframe(TrackedFrame* cur) const;
+  // After a frame the estimator lost (one camera): the keyframe's mapped landmarks matched
+  // without a prior (frontend/local_map_search.h).
+  void RelocalizeFromKeyframe(TrackedFrame* cur) const;
   // At a keyframe: searches the database, relabels the recognised points, adds the keyframe.
   std::optional<LoopDetection> DetectLoop(const Frame& frame, TrackedFrame* cur);
 
@@ -145,6 +148,7 @@ class Frontend {
   WorkerThread detection_worker_;  // Detects the right image (persistent: keeps its scratch).
   std::optional<TrackedFrame> prev_;
   std::optional<TrackedFrame> keyframe_;
+  std::optional<TrackedFrame> tracked_keyframe_;  // The last keyframe the estimator tracked.
   Pose velocity_T_prev_cur_ = Pose::Identity();
   Pose T_w_cur_ = Pose::Identity();
   double path_length_m_ = 0.0;  // Dead-reckoned distance travelled.

@@ -55,6 +55,7 @@ std::optional<LocalMapSearch::Prediction> LocalMapSearch::PredictFromMap(
     depths.push_back(p_c.z());
   }
   if (static_cast<int>(depths.size()) < min_points) return std::nullopt;
+  out.num_mapped = static_cast<int>(depths.size());
   std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
   const double median_depth = depths[depths.size() / 2];
   for (size_t i = 0; i < landmark.size(); ++i) {

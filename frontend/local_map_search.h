@@ -43,7 +43,8 @@ namespace dala {
 // the frame's estimated pose.
 struct LocalMap {
   FrameId frame;                   // The frame the estimate belongs to.
-  Pose T_w_c = Pose::Identity();   // Its estimated pose.
+  Pose T_w_c = Pose::Identity();   // Its estimated pose (a guess when !tracked).
+  bool tracked = true;             // false: the estimator lost that frame.
   std::vector<std::pair<LandmarkId, Eigen::Vector3d>> points;  // p_w.
 };
 
@@ -83,6 +84,7 @@ class LocalMapSearch {
   struct Prediction {
     Pose T_prev_cur = Pose::Identity();
     std::vector<std::optional<Eigen::Vector3d>> p_prev;  // Previous camera frame.
+    int num_mapped = 0;  // Points placed at their landmark's estimate.
   };
   std::optional<Prediction> PredictFromMap(FrameId previous_frame,
                                            const std::vector<LandmarkId>& landmark,
@@ -90,6 +92,8 @@ class LocalMapSearch {
                                            int min_points = 8) const;
 
   bool has_map() const { return options_.enable && map_.has_value(); }
+  // The estimator lost frame `frame` (its map came with tracked = false).
+  bool LostAt(FrameId frame) const { return map_ && map_->frame == frame && !map_->tracked; }
   // The landmark is in the last local map.
   bool IsMapped(LandmarkId id) const { return point_of_.count(id) > 0; }
 
