@@ -148,6 +148,9 @@ std::optional<MotionEstimate> Frontend::TrackFromPrevious(
         a.corr_match.push_back(static_cast<int>(k));
       }
       a.motion = motion_estimator_.EstimateEssential(uv_prev, uv_cur);
+      // No epipolar geometry (pure rotation): the rotation's homography still verifies the
+      // tracks, so the landmark ids live on and the estimator can say why it does not start.
+      if (!a.motion) a.motion = motion_estimator_.EstimateRotation(uv_prev, uv_cur);
     }
     return a;
   };

@@ -255,4 +255,40 @@ std::optional<MotionResult> MotionEstimator::EstimateEssential(
   return result;
 }
 
+std::optional<MotionResult> MotionEstimator::EstimateRotation(
+    const std::vector<Eigen::Vector2d>& uv_prev, const std::vector<Eigen::Vector2d>& uv_cur) const {
+  CHECK_EQ(uv_prev.size(), uv_cur.size()) << "EstimateRotation needs paired points";
+  const int n = static_cast<int>(uv_prev.size());
+  if (n < std::max(4, options_.min_inliers)) return std::nullopt;
+  std::vector<cv::Point2d> a, b;
+  for (int i = 0; i < n; ++i) {
+    a.emplace_back(uv_prev[i].x(), uv_prev[i].y());
+    b.emplace_back(uv_cur[i].x(), uv_cur[i].y());
+  }
+  cv::theRNG().state = options_.seed;
+  cv::Mat mask;
+  const cv::Mat H_cv = cv::findHomography(a, b, cv::RANSAC, options_.ransac_threshold_px, mask,
+                                          options_.ransac_max_iterations,
+                                          options_.ransac_confidence);
+  if (H_cv.rows != 3 || H_cv.cols != 3) return std::nullopt;
+  const int inliers = cv::countNonZero(mask);
+  if (inliers < options_.min_inliers) return std::nullopt;
+  Eigen::Matrix3d H;
+  cv::cv2eigen(H_cv, H);
+  const Eigen::Matrix3d K = rig_.left.K();
+  const Eigen::Matrix3d M = K.inverse() * H * K;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d R_cur_prev = svd.matrixU() * svd.matrixV().transpose();
+  if (R_cur_prev.determinant() < 0) R_cur_prev = -R_cur_prev;
+  MotionResult result;
+  result.estimate.T_prev_cur = MakePose(R_cur_prev.transpose(), Eigen::Vector3d::Zero());
+  result.estimate.cov = Matrix6d::Identity() * 1e-2;  // As EstimateEssential: no metric model.
+  result.estimate.inliers = inliers;
+  result.estimate.correspondences = n;
+  result.estimate.scale_known = false;
+  result.inlier.resize(n);
+  for (int i = 0; i < n; ++i) result.inlier[i] = mask.at<uchar>(i) != 0;
+  return result;
+}
+
 }  // namespace dala

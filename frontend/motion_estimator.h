@@ -82,6 +82,13 @@ class MotionEstimator {
   std::optional<MotionResult> EstimateEssential(const std::vector<Eigen::Vector2d>& uv_prev,
                                                 const std::vector<Eigen::Vector2d>& uv_cur) const;
 
+  // Monocular, when the essential matrix is degenerate (a camera turning on the spot, or not
+  // moving): the homography of a pure rotation, x_cur ~ K R_cur_prev K^-1 x_prev (OpenCV RANSAC,
+  // seeded), R_cur_prev = the rotation nearest to K^-1 H K (SVD, scaled to det 1). The motion
+  // has that rotation and no translation (scale_known = false). nullopt with too few inliers.
+  std::optional<MotionResult> EstimateRotation(const std::vector<Eigen::Vector2d>& uv_prev,
+                                               const std::vector<Eigen::Vector2d>& uv_cur) const;
+
  private:
   // Residual (u, v[, d]) and its Jacobian w.r.t. delta; false when the point is behind.
   bool Linearize(const MotionCorrespondence& m, const Pose& T_prev_cur, Eigen::VectorXd* r,
