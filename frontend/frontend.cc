@@ -148,9 +148,15 @@ std::optional<MotionEstimate> Frontend::TrackFromPrevious(
         a.corr_match.push_back(static_cast<int>(k));
       }
       a.motion = motion_estimator_.EstimateEssential(uv_prev, uv_cur);
-      // No epipolar geometry (pure rotation): the rotation's homography still verifies the
-      // tracks, so the landmark ids live on and the estimator can say why it does not start.
-      if (!a.motion) a.motion = motion_estimator_.EstimateRotation(uv_prev, uv_cur);
+      // No epipolar geometry (pure rotation), or a degenerate one that keeps few of the matches
+      // (a plane: flying over flat ground): the homography verifies the tracks instead, so the
+      // landmark ids live on (and the estimator can say why it does not start).
+      if (!a.motion || 2 * a.motion->estimate.inliers < static_cast<int>(a.matches.size())) {
+        std::optional<MotionResult> h = motion_estimator_.EstimateRotation(uv_prev, uv_cur);
+        if (h && (!a.motion || h->estimate.inliers > a.motion->estimate.inliers)) {
+          a.motion = std::move(h);
+        }
+      }
     }
     return a;
   };

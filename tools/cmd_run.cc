@@ -264,6 +264,12 @@ int RunRun(const std::vector<std::string>& args) {
     for (const auto& w : summary["warnings"])
       std::cout << "note        " << w.get<std::string>() << "\n";
   }
+  if (trajectory.size() < stats.size()) {
+    std::cout << "note        " << stats.size() - trajectory.size()
+              << " frames have no pose (before the monocular initialisation): trajectory files "
+                 "leave them out; pair trajectory_kitti.txt with ground truth by time "
+                 "(trajectory.txt)\n";
+  }
   std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
             << "map.dmap, report.json" << (gt ? ", trajectory.png" : "") << ")\n";
   return 0;
