@@ -143,6 +143,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("mono_init", "min_points", &mi.two_view.min_points);
   v->Field("mono_init", "min_parallax_deg", &mi.two_view.min_parallax_deg);
   v->Field("mono_init", "min_point_parallax_deg", &mi.two_view.min_point_parallax_deg);
+  v->Field("mono_init", "min_residual_parallax_deg", &mi.two_view.min_residual_parallax_deg);
   v->Field("mono_init", "min_cells", &mi.two_view.min_cells);
   v->Field("mono_init", "homography_ratio", &mi.two_view.homography_ratio);
   v->Field("mono_init", "sigma_px", &mi.two_view.sigma_px);
