@@ -77,7 +77,7 @@ MonoEkfEstimator::MonoEkfEstimator(const PinholeCamera& camera, const MonoEkfOpt
   if (options.prediction == "motion") {
     prediction_ = Prediction::kMotion;
   } else {
-    initializer_ = std::make_unique<MonoInitializer>(camera, options.mono_init);
+    initializer_.emplace(camera, options.mono_init);
     if (options.prediction == "constant_velocity") SwitchToConstantVelocity();
   }
 }

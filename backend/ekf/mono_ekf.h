@@ -101,7 +101,7 @@
 
 #include <deque>
 #include <map>
-#include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -272,7 +272,7 @@ class MonoEkfEstimator : public Estimator {
   int frame_index_ = -1;
   MonoEkfFrameStats stats_;
   Prediction prediction_ = Prediction::kUndecided;
-  std::unique_ptr<MonoInitializer> initializer_;  // Constant velocity, before its start.
+  std::optional<MonoInitializer> initializer_;  // Constant velocity, before its start.
   double initial_speed_ = 0;                      // |nu_0| (map units per second).
   int64_t last_t_ns_ = 0;
   double last_dt_ = 0;
