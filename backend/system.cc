@@ -28,7 +28,9 @@ std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptio
   if (options.estimator == "ekf" && options.mode == "mono") {
     // With mono_stereo_motion the frontend runs stereo: its visual motion is the mono EKF's
     // scale-fixing dead reckoning (as on the paper's robots); the filter uses left pixels only.
-    return std::make_unique<MonoEkfEstimator>(rig.left, options.ekf_mono);
+    MonoEkfOptions ekf_mono = options.ekf_mono;
+    ekf_mono.mono_init = options.ba.mono_init;  // Section "mono_init": both mono estimators.
+    return std::make_unique<MonoEkfEstimator>(rig.left, ekf_mono);
   }
   throw Error() << "estimator '" << options.estimator << "' in mode '" << options.mode
                 << "' is not supported; available: ba/stereo, ba/mono, ekf/stereo, ekf/mono";
@@ -54,7 +56,21 @@ System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), 
 TrackResult System::Track(const Frame& frame) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  const FrameMeasurement m = frontend_->Process(frame);
+  FrameMeasurement m = frontend_->Process(frame);
+  if (options_.use_odometry && frame.T_w_odom && T_w_odom_prev_) {
+    // Odometry between the previous frame and this one (SystemOptions::use_odometry).
+    MotionEstimate odometry;
+    odometry.T_prev_cur = T_w_odom_prev_->inverse() * *frame.T_w_odom;
+    const double sr = options_.odometry_sigma_rot;
+    const double st = options_.odometry_sigma_trans +
+                      options_.odometry_sigma_trans_fraction * odometry.T_prev_cur.translation().norm();
+    Vector6d var;
+    var << sr * sr, sr * sr, sr * sr, st * st, st * st, st * st;
+    odometry.cov = var.asDiagonal();
+    m.odometry = odometry;
+    odometry_given_ = true;
+  }
+  T_w_odom_prev_ = frame.T_w_odom;
   const auto t1 = Clock::now();
   EstimatorOutput e = estimator_->Add(m);
   const LocalMapSearchOptions& search = options_.frontend.local_map;
@@ -140,6 +156,8 @@ std::vector<SavedKeyframe> System::keyframes() const {
 
 std::string System::ScaleDescription() const {
   if (options_.mode == "stereo") return "metric (stereo)";
+  // The mono EKF prefers the odometry to the stereo motion (backend/ekf/mono_ekf.h).
+  if (options_.estimator == "ekf" && odometry_given_) return "metric (odometry)";
   if (options_.mono_stereo_motion) return "metric (stereo visual motion)";
   return "arbitrary (monocular)";
 }

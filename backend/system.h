@@ -15,6 +15,7 @@
 // The world frame is the first frame's left camera. Not thread-safe; deterministic.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -87,9 +88,10 @@ class System {
   // not yet continue tracking inside a loaded map.
   static SavedMap LoadMap(const std::string& path);
   const SystemOptions& options() const { return options_; }
-  // What fixes the map's unit: "metric (stereo)", "metric (stereo visual motion)" (the mono EKF
-  // fed by the stereo motion) or "arbitrary (monocular)" (one camera: the unit is the first
-  // two-view baseline; align with Sim(3) to compare with a metric ground truth).
+  // What fixes the map's unit: "metric (stereo)", "metric (odometry)" (the mono EKF fed by the
+  // dataset's odometry), "metric (stereo visual motion)" (the mono EKF fed by the stereo motion)
+  // or "arbitrary (monocular)" (one camera: the unit is the first two-view baseline; align with
+  // Sim(3) to compare with a metric ground truth).
   std::string ScaleDescription() const;
   const Estimator& estimator() const { return *estimator_; }
 
@@ -101,6 +103,8 @@ class System {
   std::unique_ptr<Frontend> frontend_;
   std::unique_ptr<Estimator> estimator_;
   std::vector<FrameStats> stats_;
+  std::optional<Pose> T_w_odom_prev_;  // The previous frame's odometry pose, if it had one.
+  bool odometry_given_ = false;        // A measurement carried odometry to the estimator.
   // The keyframes with their points, and each one's index in the trajectory: frame, time and
   // pose are refreshed from the estimator's trajectory when asked (they follow later
   // corrections). Mutable: SaveMap refreshes them and lends them to the writer instead of

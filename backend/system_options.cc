@@ -24,6 +24,11 @@ bool SystemOptions::IsValid(std::string* why) const {
     return fail("mode must be 'stereo' or 'mono', not '" + mode + "'");
   if (mono_stereo_motion && !(mode == "mono" && estimator == "ekf"))
     return fail("mono_stereo_motion is an option of the mono EKF (estimator=ekf, mode=mono)");
+  if (!(odometry_sigma_rot > 0) || !(odometry_sigma_trans >= 0) ||
+      !(odometry_sigma_trans_fraction >= 0) ||
+      !(odometry_sigma_trans > 0 || odometry_sigma_trans_fraction > 0))
+    return fail("odometry_sigma_rot must be > 0, odometry_sigma_trans and "
+                "odometry_sigma_trans_fraction >= 0 and not both 0");
   return frontend.IsValid(why) && ba.IsValid(why) && ekf_stereo.IsValid(why) &&
          ekf_mono.IsValid(why);
 }
@@ -32,6 +37,10 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("", "estimator", &o->estimator);
   v->Field("", "mode", &o->mode);
   v->Field("", "mono_stereo_motion", &o->mono_stereo_motion);
+  v->Field("", "use_odometry", &o->use_odometry);
+  v->Field("", "odometry_sigma_rot", &o->odometry_sigma_rot);
+  v->Field("", "odometry_sigma_trans", &o->odometry_sigma_trans);
+  v->Field("", "odometry_sigma_trans_fraction", &o->odometry_sigma_trans_fraction);
   HarrisOptions& h = o->frontend.harris;
   v->Field("harris", "sigma_d", &h.sigma_d);
   v->Field("harris", "sigma_i", &h.sigma_i);
@@ -172,6 +181,12 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ekf_mono", "sprt_missed_detection", &em.sprt_missed_detection);
   v->Field("ekf_mono", "min_image_motion_chi2", &em.min_image_motion_chi2);
   v->Field("ekf_mono", "gate_chi2", &em.gate_chi2);
+  v->Field("ekf_mono", "prediction", &em.prediction);
+  v->Field("ekf_mono", "cv_angular_acceleration_sigma", &em.cv_angular_acceleration_sigma);
+  v->Field("ekf_mono", "cv_linear_acceleration_sigma", &em.cv_linear_acceleration_sigma);
+  v->Field("ekf_mono", "init_rotation_sigma", &em.init_rotation_sigma);
+  v->Field("ekf_mono", "init_translation_sigma", &em.init_translation_sigma);
+  v->Field("ekf_mono", "init_per_zone", &em.init_per_zone);
 }
 
 namespace {

@@ -30,6 +30,17 @@ struct SystemOptions {
   // frontend runs on the stereo pair and its visual motion is the filter's dead reckoning,
   // which fixes the scale, while the filter observes left pixels only.
   bool mono_stereo_motion = false;
+  // A dataset's odometry (Frame::T_w_odom, e.g. the odometry.txt of `dala synth --odometry`):
+  // System::Track gives each frame's FrameMeasurement::odometry T_prev_cur =
+  // T_w_odom_prev^-1 T_w_odom_cur with the covariance of the right perturbation
+  // diag(sr^2 I3, st^2 I3), sr = odometry_sigma_rot (rad per frame), st = odometry_sigma_trans +
+  // odometry_sigma_trans_fraction |t_prev_cur| (m); the defaults are those `dala synth` draws its
+  // noise with (core/sim/synthetic_sequence.h). The mono EKF uses it (the scale then is metric);
+  // the other estimators ignore it. false: not given.
+  bool use_odometry = true;
+  double odometry_sigma_rot = 0.002;
+  double odometry_sigma_trans = 0.005;
+  double odometry_sigma_trans_fraction = 0.02;
   FrontendOptions frontend;
   SlidingWindowEstimatorOptions ba;
   StereoEkfOptions ekf_stereo;

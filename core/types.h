@@ -51,6 +51,10 @@ struct Frame {
   cv::Mat right;  // Empty for monocular datasets.
   // Ground-truth pose of the left (rectified) camera in the world, when the dataset has one.
   std::optional<Pose> T_w_c0_gt;
+  // The left camera's pose by the dataset's odometry (a motion sensor, e.g. the odometry.txt of
+  // `dala synth --odometry`), in the odometry's own world frame: only the relative motions
+  // T_w_odom_prev^-1 T_w_odom_cur mean something.
+  std::optional<Pose> T_w_odom;
 
   bool is_stereo() const { return !right.empty(); }
 };

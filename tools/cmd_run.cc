@@ -158,8 +158,7 @@ int RunRun(const std::vector<std::string>& args) {
   System system(dataset->rig(), options);
   std::cerr << "[run] " << args[0] << " (" << DatasetFormatName(dataset->format()) << ", "
             << dataset->size() << " frames, " << (dataset->is_stereo() ? "stereo" : "mono")
-            << ") with " << options.estimator << "/" << options.mode << ", scale "
-            << system.ScaleDescription() << "\n";
+            << ") with " << options.estimator << "/" << options.mode << "\n";
   Progress progress(dataset->size(), FLAGS_progress);
   const auto start = std::chrono::steady_clock::now();
   Frame frame;
@@ -216,7 +215,8 @@ int RunRun(const std::vector<std::string>& args) {
       {"tracking_failures", failures},
       {"frames_initialising", initialising},
       {"frames_with_pose", trajectory.size()},
-      {"scale", system.ScaleDescription()},
+      // "scale" is the evaluation's Sim(3) scale (below): what fixes the map's unit is this.
+      {"scale_source", system.ScaleDescription()},
       {"keyframes", keyframes},
       {"loops_detected", loops},
       {"loops_closed", loops_closed},

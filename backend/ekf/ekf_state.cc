@@ -7,9 +7,10 @@
 
 namespace dala {
 
-EkfState::EkfState(int max_landmarks) : max_landmarks_(max_landmarks) {
+EkfState::EkfState(int max_landmarks, bool with_velocity)
+    : max_landmarks_(max_landmarks), landmark_offset_(with_velocity ? 12 : 6) {
   CHECK_GE(max_landmarks, 0);
-  const int n = 6 + 3 * max_landmarks;
+  const int n = landmark_offset_ + 3 * max_landmarks;
   P_ = Eigen::MatrixXd::Zero(n, n);
 }
 
@@ -22,6 +23,20 @@ void EkfState::Reset(const Pose& T_w_c, const Matrix6d& cov_pose) {
   // delta = Adj(T^-1) xi, so Cov(xi) = Adj(T) Cov(delta) Adj(T)^T.
   const Matrix6d A = AdjointSE3(T_w_c);
   P_.topLeftCorner<6, 6>() = A * cov_pose * A.transpose();
+  w_.setZero();
+}
+
+void EkfState::Reset(const Pose& T_w_c, const Matrix6d& cov_pose, const Vector6d& w,
+                     const Matrix6d& cov_w) {
+  CHECK(has_velocity()) << "EkfState: Reset with a velocity needs with_velocity";
+  Reset(T_w_c, cov_pose);
+  w_ = w;
+  P_.block<6, 6>(6, 6) = 0.5 * (cov_w + cov_w.transpose());
+}
+
+Matrix6d EkfState::velocity_covariance() const {
+  CHECK(has_velocity());
+  return P_.block<6, 6>(6, 6);
 }
 
 int EkfState::IndexOf(LandmarkId id) const {
@@ -36,7 +51,7 @@ Matrix6d EkfState::pose_covariance() const {
 
 Eigen::Matrix3d EkfState::landmark_covariance(int i) const {
   // p_w - p_hat = -[p_hat]x phi + e_i.
-  const int o = 6 + 3 * i;
+  const int o = landmark_offset_ + 3 * i;
   const Eigen::Matrix3d M = -Skew(p_w_[i]);
   const Eigen::Matrix3d cross = M * P_.block<3, 3>(0, o);
   return M * P_.topLeftCorner<3, 3>() * M.transpose() + cross + cross.transpose() +
@@ -45,14 +60,16 @@ Eigen::Matrix3d EkfState::landmark_covariance(int i) const {
 
 Eigen::MatrixXd EkfState::covariance() const {
   // C = J P J^T with J the map from e to the classic error: pose rows Adj(T^-1) (on xi),
-  // landmark rows [-[p_hat_i]x (on phi), I (on e_i)].
+  // velocity rows I (on e_w), landmark rows [-[p_hat_i]x (on phi), I (on e_i)].
   const int n = dim();
   const Matrix6d A = AdjointSE3(T_w_c_.inverse());
   auto apply_j = [&](const Eigen::MatrixXd& X) {
     Eigen::MatrixXd Y(n, X.cols());
     Y.topRows(6) = A * X.topRows(6);
+    if (has_velocity()) Y.middleRows(6, 6) = X.middleRows(6, 6);
     for (int i = 0; i < num_landmarks(); ++i) {
-      Y.middleRows(6 + 3 * i, 3) = X.middleRows(6 + 3 * i, 3) - Skew(p_w_[i]) * X.topRows(3);
+      const int o = landmark_offset_ + 3 * i;
+      Y.middleRows(o, 3) = X.middleRows(o, 3) - Skew(p_w_[i]) * X.topRows(3);
     }
     return Y;
   };
@@ -70,9 +87,10 @@ void EkfState::AddPoseNoise(const Matrix6d& Q_delta) {
   const Eigen::Matrix3d R = T_w_c_.linear();
   Eigen::MatrixXd B(n, 6);
   B.topRows(6) = AdjointSE3(T_w_c_) * sqrt_Q;
+  if (has_velocity()) B.middleRows(6, 6).setZero();
   const Eigen::Matrix<double, 3, 6> sqrt_Q_phi = sqrt_Q.topRows(3);
   for (int i = 0; i < num_landmarks(); ++i) {
-    B.middleRows(6 + 3 * i, 3) = Skew(p_w_[i]) * R * sqrt_Q_phi;
+    B.middleRows(landmark_offset_ + 3 * i, 3) = Skew(p_w_[i]) * R * sqrt_Q_phi;
   }
   auto P = P_.topLeftCorner(n, n);
   P.selfadjointView<Eigen::Lower>().rankUpdate(B, 1.0);
@@ -86,6 +104,32 @@ void EkfState::Predict(const Pose& T_prev_cur, const Matrix6d& Q) {
 }
 
 void EkfState::InflatePose(const Matrix6d& Q) { AddPoseNoise(Q); }
+
+void EkfState::PredictConstantVelocity(double dt, const Matrix6d& Q_V) {
+  CHECK(has_velocity()) << "EkfState: constant-velocity prediction needs with_velocity";
+  CHECK_GT(dt, 0.0);
+  const Vector6d step = w_ * dt;
+  T_w_c_ = Orthonormalized(T_w_c_ * ExpSE3(step));
+  const Matrix6d J = RightJacobianSE3(step) * dt;  // d (body increment) / d w.
+  const int n = dim();
+  // X (file comment): rows of the pose and the landmarks, zero on the velocity rows.
+  Eigen::MatrixXd X = Eigen::MatrixXd::Zero(n, 6);
+  X.topRows(6) = AdjointSE3(T_w_c_) * J;
+  const Eigen::Matrix<double, 3, 6> R_J_phi = T_w_c_.linear() * J.topRows(3);
+  for (int i = 0; i < num_landmarks(); ++i) {
+    X.middleRows(landmark_offset_ + 3 * i, 3) = Skew(p_w_[i]) * R_J_phi;
+  }
+  auto P = P_.topLeftCorner(n, n);
+  const Eigen::MatrixXd P_w = P.middleCols(6, 6);  // A copy: P changes below.
+  const Matrix6d P_ww = P_w.middleRows(6, 6);
+  Eigen::MatrixXd B = X;
+  B.middleRows(6, 6) = Matrix6d::Identity();
+  const Eigen::MatrixXd XP = X * P_w.transpose();
+  P += XP + XP.transpose();
+  P.noalias() += X * P_ww * X.transpose();
+  P.noalias() += B * Q_V * B.transpose();
+  P = (0.5 * (P + P.transpose())).eval();
+}
 
 int EkfState::AddLandmarkFromCamera(LandmarkId id, const Eigen::Vector3d& p_c,
                                     const Eigen::Matrix3d& cov_p_c) {
@@ -129,12 +173,12 @@ void EkfState::RemoveLandmarks(const std::vector<bool>& remove) {
   // Kept state coordinates, in order.
   std::vector<int> keep;
   keep.reserve(n);
-  for (int k = 0; k < 6; ++k) keep.push_back(k);
+  for (int k = 0; k < landmark_offset_; ++k) keep.push_back(k);
   std::vector<LandmarkId> ids;
   std::vector<Eigen::Vector3d> p_w;
   for (int i = 0; i < num_landmarks(); ++i) {
     if (remove[i]) continue;
-    for (int k = 0; k < 3; ++k) keep.push_back(6 + 3 * i + k);
+    for (int k = 0; k < 3; ++k) keep.push_back(landmark_offset_ + 3 * i + k);
     ids.push_back(ids_[i]);
     p_w.push_back(p_w_[i]);
   }
@@ -164,7 +208,7 @@ Eigen::MatrixXd EkfState::InnovationCovariance(const EkfUpdateBlock& b) const {
   const Eigen::MatrixXd H_xi = InvariantHPose(b);
   Eigen::MatrixXd S = H_xi * P_.topLeftCorner<6, 6>() * H_xi.transpose() + b.R;
   if (l >= 0) {
-    const int o = 6 + 3 * l;
+    const int o = landmark_offset_ + 3 * l;
     const Eigen::MatrixXd cross = H_xi * P_.block(0, o, 6, 3) * b.H_landmark.transpose();
     S += cross + cross.transpose() + b.H_landmark * P_.block<3, 3>(o, o) * b.H_landmark.transpose();
   }
@@ -192,7 +236,8 @@ bool EkfState::Update(const std::vector<EkfUpdateBlock>& blocks) {
     H_xi.push_back(InvariantHPose(b));
     W.middleCols(row, k) = P_.topLeftCorner(n, 6) * H_xi.back().transpose();
     if (b.landmark >= 0) {
-      W.middleCols(row, k) += P_.block(0, 6 + 3 * b.landmark, n, 3) * b.H_landmark.transpose();
+      W.middleCols(row, k) +=
+          P_.block(0, landmark_offset_ + 3 * b.landmark, n, 3) * b.H_landmark.transpose();
     }
     r.segment(row, k) = b.residual;
     R.block(row, row, k, k) = b.R;
@@ -205,7 +250,9 @@ bool EkfState::Update(const std::vector<EkfUpdateBlock>& blocks) {
     const EkfUpdateBlock& b = blocks[j];
     const int k = static_cast<int>(b.residual.size());
     S.middleRows(row, k) += H_xi[j] * W.topRows(6);
-    if (b.landmark >= 0) S.middleRows(row, k) += b.H_landmark * W.middleRows(6 + 3 * b.landmark, 3);
+    if (b.landmark >= 0) {
+      S.middleRows(row, k) += b.H_landmark * W.middleRows(landmark_offset_ + 3 * b.landmark, 3);
+    }
     row += k;
   }
   S = 0.5 * (S + S.transpose()).eval();
@@ -217,13 +264,14 @@ bool EkfState::Update(const std::vector<EkfUpdateBlock>& blocks) {
   auto P = P_.topLeftCorner(n, n);
   P.selfadjointView<Eigen::Lower>().rankUpdate(V, -1.0);
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose().eval();
-  // Injection on SE_{1+N}(3): T <- Exp(xi) T, p_i <- Exp(phi) p_i + J_l(phi) e_i.
+  // Injection on SE_{1+N}(3): T <- Exp(xi) T, p_i <- Exp(phi) p_i + J_l(phi) e_i; w <- w + e_w.
   const Vector6d xi = dx.head<6>();
   T_w_c_ = Orthonormalized(ExpSE3(xi) * T_w_c_);
   const Eigen::Matrix3d R_phi = ExpSO3(xi.head<3>());
   const Eigen::Matrix3d J_l = LeftJacobianSO3(xi.head<3>());
+  if (has_velocity()) w_ += dx.segment<6>(6);
   for (int i = 0; i < num_landmarks(); ++i) {
-    p_w_[i] = R_phi * p_w_[i] + J_l * dx.segment<3>(6 + 3 * i);
+    p_w_[i] = R_phi * p_w_[i] + J_l * dx.segment<3>(landmark_offset_ + 3 * i);
   }
   return true;
 }

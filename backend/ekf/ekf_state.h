@@ -46,6 +46,23 @@
 // Landmark augmentation from a point p_c measured in the current camera frame with covariance
 // C (independent of the state): p_w = R p_c + t gives e_new = rho + R_hat dp_c, so
 //   P_ll = P_rho,rho + R C R^T,  P_l,x = P_rho,x   (full cross-covariance).
+//
+// Optional velocity (EkfState(max, /*with_velocity=*/true), the mono EKF's constant-velocity
+// model): x = (T_w_c, w, p_w_1 .. p_w_N) with w = [omega; nu] the camera's twist in its own frame,
+// per second: over dt the camera moves by T_prev_cur = Exp(w dt) (core/geometry.h ExpSE3).
+// Its error is additive, w = w_hat + e_w, e = [phi; rho; e_w; e_1; ...] (dimension 12 + 3N). A
+// body-frame twist does not change under a global rotation/translation of the scene, so the
+// unobservable directions above stay [phi = dtheta, e_w = 0, ...] and [0, dt, e_w = 0, dt, ...]:
+// the consistency argument holds unchanged. Observations never involve w (zero columns); it is
+// corrected through its correlation with the pose.
+// Constant-velocity prediction with a velocity impulse V ~ N(0, Q_V) (an acceleration random
+// walk, MonoSLAM): w_cur = w + V, T_cur = T_prev Exp((w + V) dt). With M_hat = Exp(w_hat dt)
+// and J = J_r(w_hat dt) dt (RightJacobianSE3), Exp((w + V) dt) ~= M_hat Exp(J (e_w + V)), so the
+// pose takes the body increment u = J (e_w + V) like a motion noise above:
+//   xi <- xi + Adj(T_hat_cur) u,   e_i <- e_i + [p_hat_i]x R_hat_cur u_phi,   e_w <- e_w + V,
+// i.e. e <- A e + B V with A = I + X S_w (S_w selects e_w), B = X + [0; I; 0],
+//   X = [Adj(T_hat_cur) J; 0; [p_hat_1]x R_hat_cur J_phi; ...]   (J_phi: the rotation rows of J),
+//   P <- A P A^T + B Q_V B^T = P + X P_w^T + P_w X^T + X P_ww X^T + B Q_V B^T  (P_w = P S_w^T).
 
 #include <Eigen/Core>
 #include <unordered_map>
@@ -69,11 +86,16 @@ struct EkfUpdateBlock {
 
 class EkfState {
  public:
-  // max_landmarks bounds the state (storage is allocated once: (6+3N)^2 doubles).
-  explicit EkfState(int max_landmarks);
+  // max_landmarks bounds the state (storage is allocated once: (6+3N)^2 doubles, (12+3N)^2 with
+  // the velocity).
+  explicit EkfState(int max_landmarks, bool with_velocity = false);
 
-  // cov_pose: of the right perturbation delta (T_w_c = T_hat Exp(delta)).
+  // cov_pose: of the right perturbation delta (T_w_c = T_hat Exp(delta)). With the velocity:
+  // it is set to zero with zero covariance (use the overload).
   void Reset(const Pose& T_w_c, const Matrix6d& cov_pose);
+  // With the velocity (CHECK): w and its covariance (uncorrelated with the pose).
+  void Reset(const Pose& T_w_c, const Matrix6d& cov_pose, const Vector6d& w,
+             const Matrix6d& cov_w);
 
   const Pose& T_w_c() const { return T_w_c_; }
   // Covariance of delta in T_w_c = T_hat Exp(delta).
@@ -81,14 +103,19 @@ class EkfState {
   int num_landmarks() const { return static_cast<int>(ids_.size()); }
   int max_landmarks() const { return max_landmarks_; }
   bool full() const { return num_landmarks() >= max_landmarks_; }
-  int dim() const { return 6 + 3 * num_landmarks(); }
+  int dim() const { return landmark_offset_ + 3 * num_landmarks(); }
+  bool has_velocity() const { return landmark_offset_ > 6; }
+  // The twist [omega; nu] per second in the camera frame, and its covariance (with_velocity).
+  const Vector6d& velocity() const { return w_; }
+  Matrix6d velocity_covariance() const;
   // State index of a landmark id, -1 when not in the state.
   int IndexOf(LandmarkId id) const;
   LandmarkId id(int i) const { return ids_[i]; }
   const Eigen::Vector3d& p_w(int i) const { return p_w_[i]; }
   // Covariance of p_w_i - p_hat_i.
   Eigen::Matrix3d landmark_covariance(int i) const;
-  // The full covariance in the classic coordinates [delta; p_w_1 - p_hat_1; ...] (a copy, O(N^2)).
+  // The full covariance in the classic coordinates [delta; (e_w;) p_w_1 - p_hat_1; ...] (a copy,
+  // O(N^2)).
   Eigen::MatrixXd covariance() const;
   // The stored covariance of the invariant error e (file comment).
   Eigen::Block<const Eigen::MatrixXd> invariant_covariance() const {
@@ -100,6 +127,9 @@ class EkfState {
   // Adds Q to the covariance of delta (T_w_c = T_hat Exp(delta)): the pose is kept, no motion
   // known. Correlations are updated as for a prediction with the identity motion.
   void InflatePose(const Matrix6d& Q);
+  // Constant-velocity prediction over dt seconds (file comment); Q_V is the covariance of the
+  // velocity impulse V of this step. CHECKs has_velocity().
+  void PredictConstantVelocity(double dt, const Matrix6d& Q_V);
 
   // Appends a landmark from p_c (current camera frame, covariance cov_p_c). CHECKs not full and
   // id not present. Returns its index.
@@ -130,11 +160,13 @@ class EkfState {
   void AddPoseNoise(const Matrix6d& Q_delta);
 
   int max_landmarks_;
+  int landmark_offset_;  // 6, or 12 with the velocity: index of the first landmark's error.
   Pose T_w_c_ = Pose::Identity();
+  Vector6d w_ = Vector6d::Zero();
   std::vector<LandmarkId> ids_;
   std::vector<Eigen::Vector3d> p_w_;
   std::unordered_map<LandmarkId, int> index_;
-  Eigen::MatrixXd P_;  // (6 + 3 max) square storage; the top-left dim() block is the covariance.
+  Eigen::MatrixXd P_;  // (offset + 3 max) square storage; the top-left dim() block is the covariance.
 };
 
 }  // namespace dala

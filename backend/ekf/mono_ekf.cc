@@ -36,6 +36,18 @@ bool MonoEkfOptions::IsValid(std::string* why) const {
   if (!(lost_rotation_sigma >= 0) || !(lost_translation_sigma >= 0)) {
     os << "lost sigmas must be >= 0; ";
   }
+  if (prediction != "auto" && prediction != "motion" && prediction != "constant_velocity") {
+    os << "prediction must be auto, motion or constant_velocity (got '" << prediction << "'); ";
+  }
+  if (!(cv_angular_acceleration_sigma > 0) || !(cv_linear_acceleration_sigma > 0)) {
+    os << "cv_angular_acceleration_sigma and cv_linear_acceleration_sigma must be > 0; ";
+  }
+  if (!(init_rotation_sigma > 0) || !(init_translation_sigma > 0)) {
+    os << "init_rotation_sigma and init_translation_sigma must be > 0; ";
+  }
+  if (init_per_zone < 1) os << "init_per_zone must be >= 1; ";
+  std::string init_why;
+  if (!mono_init.IsValid(&init_why)) os << init_why << "; ";
   if (why != nullptr) *why = os.str();
   return os.str().empty();
 }
@@ -62,6 +74,130 @@ MonoEkfEstimator::MonoEkfEstimator(const PinholeCamera& camera, const MonoEkfOpt
   CHECK(options.IsValid(&why)) << "MonoEkfOptions: " << why;
   CHECK(camera.IsValid(&why)) << "MonoEkfEstimator: " << why;
   CHECK(!camera.HasDistortion()) << "MonoEkfEstimator takes rectified (undistorted) pixels";
+  if (options.prediction == "motion") {
+    prediction_ = Prediction::kMotion;
+  } else {
+    initializer_.emplace(camera, options.mono_init);
+    if (options.prediction == "constant_velocity") SwitchToConstantVelocity();
+  }
+}
+
+std::string MonoEkfEstimator::prediction() const {
+  switch (prediction_) {
+    case Prediction::kMotion:
+      return "motion";
+    case Prediction::kConstantVelocity:
+      return "constant_velocity";
+    default:
+      return "auto";
+  }
+}
+
+void MonoEkfEstimator::SwitchToConstantVelocity() {
+  prediction_ = Prediction::kConstantVelocity;
+  state_ = EkfState(options_.max_landmarks, /*with_velocity=*/true);
+  info_.clear();
+  candidates_.clear();
+  directions_.clear();
+  rejected_.clear();
+  pose_buffer_.clear();
+  trajectory_ = Trajectory();
+}
+
+Matrix6d MonoEkfEstimator::VelocityNoise(double dt) const {
+  const double sa = options_.cv_angular_acceleration_sigma;
+  const double sl = options_.cv_linear_acceleration_sigma * initial_speed_;
+  Vector6d var;
+  var << sa * sa, sa * sa, sa * sa, sl * sl, sl * sl, sl * sl;
+  return Matrix6d(var.asDiagonal()) * dt;
+}
+
+void MonoEkfEstimator::StartFromTwoView(const MonoInitialization& init) {
+  const int n_steps = static_cast<int>(init.between.size()) + 1;
+  double span = 1e-9 * static_cast<double>(init.current.t_ns - init.reference.t_ns);
+  if (!(span > 0)) {
+    LOG(WARNING) << "MonoEkf: timestamps do not increase; velocity per frame";
+    span = n_steps;
+  }
+  // The mean velocity over the span, with the random walk over the span as its uncertainty.
+  const Vector6d w0 = LogSE3(init.T_ref_cur) / span;
+  initial_speed_ = w0.tail<3>().norm();
+  Vector6d pose_var;
+  const double sr = options_.init_rotation_sigma, st = options_.init_translation_sigma;
+  pose_var << sr * sr, sr * sr, sr * sr, st * st, st * st, st * st;
+  state_.Reset(init.T_ref_cur, pose_var.asDiagonal(), w0, VelocityNoise(span));
+  last_t_ns_ = init.current.t_ns;
+  last_dt_ = span / n_steps;
+  trajectory_.Add(init.reference.t_ns, Pose::Identity());  // The world frame.
+
+  // Landmarks: the two-view points with their triangulation covariance (poses fixed), the best
+  // (smallest relative depth sigma) init_per_zone per zone of the current image.
+  std::unordered_map<LandmarkId, const FeatureObservation*> in_ref, in_cur;
+  for (const FeatureObservation& o : init.reference.observations) in_ref[o.landmark] = &o;
+  for (const FeatureObservation& o : init.current.observations) in_cur[o.landmark] = &o;
+  struct Point {
+    int zone;
+    double relative_sigma;
+    LandmarkId id;
+    Eigen::Vector3d p;
+    Eigen::Matrix3d cov;
+  };
+  std::vector<Point> points;
+  for (const auto& [id, p_ref] : init.p_ref) {
+    const auto r = in_ref.find(id), c = in_cur.find(id);
+    if (r == in_ref.end() || c == in_cur.end()) continue;
+    Eigen::Vector2d uv;
+    Eigen::Matrix<double, 2, 3> H_r, H_c;
+    if (!PredictMonoObservation(camera_, Pose::Identity(), p_ref, &uv, nullptr, &H_r) ||
+        !PredictMonoObservation(camera_, init.T_ref_cur, p_ref, &uv, nullptr, &H_c)) {
+      continue;
+    }
+    const double s2_r = r->second->sigma_px * r->second->sigma_px;
+    const double s2_c = c->second->sigma_px * c->second->sigma_px;
+    const Eigen::Matrix3d info = H_r.transpose() * H_r / s2_r + H_c.transpose() * H_c / s2_c;
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(info);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) continue;
+    const Eigen::Matrix3d cov = ldlt.solve(Eigen::Matrix3d::Identity());
+    const Eigen::Vector3d b = p_ref.normalized();
+    const double relative_sigma = std::sqrt(b.dot(cov * b)) / p_ref.norm();
+    if (!(relative_sigma < options_.alpha)) continue;
+    points.push_back({grid_.Zone(c->second->uv), relative_sigma, id, p_ref, cov});
+  }
+  std::sort(points.begin(), points.end(), [](const Point& a, const Point& b) {
+    if (a.zone != b.zone) return a.zone < b.zone;
+    if (a.relative_sigma != b.relative_sigma) return a.relative_sigma < b.relative_sigma;
+    return a.id < b.id;
+  });
+  std::vector<int> per_zone(grid_.size(), 0);
+  for (const Point& pt : points) {
+    if (state_.full()) break;
+    if (per_zone[pt.zone] >= options_.init_per_zone) continue;
+    ++per_zone[pt.zone];
+    state_.AddLandmark(pt.id, pt.p, pt.cov, Eigen::Matrix<double, 3, 6>::Zero());
+    info_[pt.id] = EkfLandmarkInfo{frame_index_, frame_index_, 2, 0};
+  }
+}
+
+EstimatorOutput MonoEkfEstimator::AddBeforeInitialization(const FrameMeasurement& m) {
+  EstimatorOutput out;
+  const std::optional<MonoInitialization> init = initializer_->Add(m);
+  if (!init) {
+    out.initializing = true;
+    out.note = "initialising: " + initializer_->reason();
+    return out;
+  }
+  StartFromTwoView(*init);
+  initializer_.reset();
+  const std::vector<int> zone_count = UpdateState(m, /*apply_updates=*/false);
+  ManageMap(m, PoseRecord{state_.T_w_c(), state_.pose_covariance()}, zone_count, &out);
+  out.valid = true;
+  std::ostringstream note;
+  note.precision(3);
+  note << "initialised from frame " << init->reference.frame << " (" << state_.num_landmarks()
+       << " of " << init->p_ref.size() << " points, " << TwoViewModelName(init->two_view.model)
+       << ", median parallax " << init->two_view.median_parallax_deg << " deg)";
+  out.note = note.str();
+  return out;
 }
 
 void MonoEkfEstimator::StartCandidate(const FeatureObservation& obs) {
@@ -298,9 +434,50 @@ bool MonoEkfEstimator::MakeRoom() {
   return true;
 }
 
+namespace {
+
+bool HasMetricMotion(const FrameMeasurement& m) {
+  return m.odometry.has_value() || (m.motion.has_value() && m.motion->scale_known);
+}
+
+}  // namespace
+
 EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   ++frame_index_;
   stats_ = {};
+  if (prediction_ == Prediction::kUndecided) {
+    if (frame_index_ == 0 && !m.stereo && !HasMetricMotion(m)) {
+      initializer_->Add(m);  // Frame 0 goes on as in "motion" below, until the next frame.
+    } else if (frame_index_ == 0 || HasMetricMotion(m)) {
+      prediction_ = Prediction::kMotion;
+      initializer_.reset();
+    } else {
+      SwitchToConstantVelocity();
+    }
+  }
+  if (prediction_ == Prediction::kConstantVelocity) {
+    if (initializer_) return AddBeforeInitialization(m);
+    double dt = 1e-9 * static_cast<double>(m.t_ns - last_t_ns_);
+    if (!(dt > 0)) {
+      LOG_FIRST_N(WARNING, 1) << "MonoEkf: timestamps do not increase; the last step is used";
+      dt = last_dt_;
+    }
+    last_t_ns_ = m.t_ns;
+    last_dt_ = dt;
+    const Pose T_w_prev = state_.T_w_c();
+    state_.PredictConstantVelocity(dt, VelocityNoise(dt));
+    const std::vector<int> zone_count = UpdateState(m, /*apply_updates=*/true);
+    // The pose buffer: the estimated step and the velocity's uncertainty over it.
+    PoseRecord record{state_.T_w_c(), state_.pose_covariance()};
+    record.T_prev_cur = T_w_prev.inverse() * state_.T_w_c();
+    const Matrix6d J = RightJacobianSE3(state_.velocity() * dt) * dt;
+    record.motion_cov = J * state_.velocity_covariance() * J.transpose();
+    EstimatorOutput out;
+    out.valid = stats_.updated > 0;
+    ManageMap(m, record, zone_count, &out);
+    return out;
+  }
+
   EstimatorOutput out;
   const MotionEstimate* motion = nullptr;
   if (m.odometry.has_value()) {
@@ -322,7 +499,19 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
     state_.InflatePose(lost_cov);
     out.valid = false;
   }
+  const std::vector<int> zone_count = UpdateState(m, /*apply_updates=*/true);
+  PoseRecord record{state_.T_w_c(), state_.pose_covariance()};
+  if (frame_index_ > 0 && motion != nullptr) {
+    record.T_prev_cur = motion->T_prev_cur;
+    record.motion_cov = motion->cov;
+  } else if (frame_index_ > 0) {
+    record.motion_cov = lost_cov;
+  }
+  ManageMap(m, record, zone_count, &out);
+  return out;
+}
 
+std::vector<int> MonoEkfEstimator::UpdateState(const FrameMeasurement& m, bool apply_updates) {
   // EKF update with the landmarks and directions seen in this frame.
   std::vector<EkfUpdateBlock> blocks;
   std::vector<int> zone_count(grid_.size(), 0);
@@ -335,6 +524,10 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   for (const FeatureObservation& obs : m.observations) {
     const double s2 = obs.sigma_px * obs.sigma_px;
     const int i = state_.IndexOf(obs.landmark);
+    if (i >= 0 && !apply_updates) {
+      ++zone_count[grid_.Zone(obs.uv)];
+      continue;
+    }
     if (i >= 0) {
       EkfLandmarkInfo& info = info_.at(obs.landmark);
       Eigen::Vector2d uv;
@@ -409,14 +602,12 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
                                                                            : std::next(it);
   }
 
+  return zone_count;
+}
+
+void MonoEkfEstimator::ManageMap(const FrameMeasurement& m, const PoseRecord& record,
+                                 std::vector<int> zone_count, EstimatorOutput* out) {
   // Pose buffer for the candidates.
-  PoseRecord record{state_.T_w_c(), state_.pose_covariance()};
-  if (frame_index_ > 0 && motion != nullptr) {
-    record.T_prev_cur = motion->T_prev_cur;
-    record.motion_cov = motion->cov;
-  } else if (frame_index_ > 0) {
-    record.motion_cov = lost_cov;
-  }
   pose_buffer_[frame_index_] = record;
   while (static_cast<int>(pose_buffer_.size()) > options_.pose_buffer_size) {
     pose_buffer_.erase(pose_buffer_.begin());
@@ -481,8 +672,7 @@ EstimatorOutput MonoEkfEstimator::Add(const FrameMeasurement& m) {
   for (const auto& [id, c] : candidates_)
     stats_.hypotheses += static_cast<int>(c.hypotheses.size());
   stats_.directions = static_cast<int>(directions_.size());
-  FinishEkfFrame(state_, m.t_ns, &out, &trajectory_);
-  return out;
+  FinishEkfFrame(state_, m.t_ns, out, &trajectory_);
 }
 
 }  // namespace dala

@@ -6,12 +6,44 @@
 // IROS 2005).
 //
 // State (backend/ekf/ekf_state.h): the camera pose T_w_c (right error, [phi; rho]) and Euclidean
-// landmarks p_w with the full covariance; the world frame is the first camera.
+// landmarks p_w with the full covariance; the world frame is the first camera (the two-view
+// reference camera with the constant-velocity model).
 //
-// Prediction: the motion that fixes the scale: m.odometry when present, else m.motion when
-// motion.scale_known (stereo visual motion used as dead reckoning, as on the paper's robots);
-// T_w_cur = T_w_prev T_prev_cur, F = Adj(T_prev_cur^-1), G = I. With neither, no prediction: the
-// pose is kept, its covariance inflated (lost_*_sigma), the frame reported not valid.
+// Two predictions, chosen once per run by options.prediction:
+// * "motion" (the paper): the motion that fixes the scale: m.odometry when present, else m.motion
+//   when motion.scale_known (stereo visual motion used as dead reckoning, as on the paper's
+//   robots); T_w_cur = T_w_prev T_prev_cur, F = Adj(T_prev_cur^-1), G = I. With neither, no
+//   prediction: the pose is kept, its covariance inflated (lost_*_sigma), the frame reported not
+//   valid.
+// * "constant_velocity" (one camera, no motion input; MonoSLAM / RT-SLAM): the state also holds
+//   the camera's twist w = [omega; nu] per second in the camera frame (EkfState with_velocity);
+//   T_w_cur = T_w_prev Exp(w dt), w_cur = w_prev + V (dt from the timestamps), V ~ N(0, Q_V dt):
+//   a velocity random walk (white acceleration), Q_V = diag(sa^2 I3, (sl |nu_0|)^2 I3) with
+//   sa = cv_angular_acceleration_sigma (rad s^-3/2) and sl = cv_linear_acceleration_sigma (s^-1/2)
+//   relative to the initial speed |nu_0| (the map's unit is arbitrary: the first baseline).
+//   Jacobians and covariance propagation: EkfState::PredictConstantVelocity. Observations do not
+//   involve w: it is corrected through its correlation with the pose.
+//   The scale comes from the two-view initialisation (backend/mono/mono_initializer.h, options
+//   mono_init): until it succeeds every frame is reported `initializing` with no pose ("initialising:
+//   <reason>"). On success at frame c with reference frame r: world = camera r (pose identity, in
+//   the trajectory), T_w_c = T_ref_cur (|t| = 1) with covariance diag(init_rotation_sigma^2,
+//   init_translation_sigma^2) (chosen, not propagated from the two-view BA); the frames between
+//   get no pose. Landmarks: the triangulated points, with the covariance of their two-view
+//   triangulation (poses fixed): C = (sum_{v = r, c} H_v^T H_v / s^2)^-1, H_v = d uv_v / d p_r, so
+//   the depth uncertainty grows as the parallax shrinks; inserted, independent of the pose, when
+//   their relative depth sigma is below alpha (as well known as one Gaussian-sum hypothesis), the
+//   best init_per_zone per image zone. They are not updated with the frame c observations (already
+//   used). Initial velocity: the mean over the span, w_0 = Log(T_ref_cur) / (t_c - t_r), with
+//   covariance Q_V (t_c - t_r) (the random walk over the span).
+//   The pose buffer of the candidates records the estimated step T_prev_cur = T_w_prev^-1 T_w_cur
+//   with covariance J P_ww J^T, J = J_r(w dt) dt (the velocity's posterior uncertainty over the
+//   step) in place of a motion input's covariance.
+// * "auto" (default): "motion" when the stream carries a motion input, else "constant_velocity".
+//   Decided at the first frame when it is stereo (its visual motion is metric), else at the
+//   second (the first that can carry odometry or a motion): frame 0 is processed as in "motion"
+//   (pose identity) and given to the two-view initializer; switching to "constant_velocity"
+//   there discards that start (frame 0 keeps its pose only if it becomes the two-view reference,
+//   as it normally does).
 //
 // Observation of a landmark in the state: z = uv = pi(K, T_w_c^-1 p_w), R = s^2 I2,
 // H = d_uv_d_pc [[p_c]x, -I | R_w_c^T]; gated by chi2_2(99 %) = 9.21, batched symmetric update.
@@ -69,6 +101,7 @@
 
 #include <deque>
 #include <map>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -77,6 +110,7 @@
 #include "backend/ekf/ekf_map.h"
 #include "backend/ekf/ekf_state.h"
 #include "backend/estimator.h"
+#include "backend/mono/mono_initializer.h"
 #include "core/camera.h"
 
 namespace dala {
@@ -108,6 +142,20 @@ struct MonoEkfOptions {
   int evict_unseen_frames = 10;
   double lost_rotation_sigma = 0.05;
   double lost_translation_sigma = 0.5;
+  // Prediction model (file comment): "auto", "motion" or "constant_velocity".
+  std::string prediction = "auto";
+  // Constant-velocity model: velocity random walk, angular in rad s^-3/2, linear relative to the
+  // initial speed |nu_0| in s^-1/2 (chosen: about the accelerations of a car or a walking
+  // camera; not published).
+  double cv_angular_acceleration_sigma = 0.5;
+  double cv_linear_acceleration_sigma = 0.5;
+  // The two-view start: pose sigmas (rad; units of the first baseline), landmarks per zone.
+  double init_rotation_sigma = 0.002;
+  double init_translation_sigma = 0.01;
+  int init_per_zone = 6;
+  // The two-view initialisation; System copies SystemOptions::ba.mono_init here (section
+  // "mono_init" of the options, shared by both monocular estimators).
+  MonoInitializerOptions mono_init;
 
   bool IsValid(std::string* why) const;
 };
@@ -141,6 +189,8 @@ class MonoEkfEstimator : public Estimator {
   const MonoEkfFrameStats& last_stats() const { return stats_; }
   bool IsCandidate(LandmarkId id) const { return candidates_.count(id) > 0; }
   bool IsDirection(LandmarkId id) const { return directions_.count(id) > 0; }
+  // The model in use: "motion" or "constant_velocity" ("auto" until decided).
+  std::string prediction() const;
 
  private:
   struct Hypothesis {
@@ -192,6 +242,22 @@ class MonoEkfEstimator : public Estimator {
   bool InsertLandmark(LandmarkId id, const Candidate& c, const Hypothesis& h);
   bool MakeRoom();
 
+  enum class Prediction { kUndecided, kMotion, kConstantVelocity };
+  // The constant-velocity model: before the two-view initialisation, and its start.
+  EstimatorOutput AddBeforeInitialization(const FrameMeasurement& m);
+  void StartFromTwoView(const MonoInitialization& init);
+  void SwitchToConstantVelocity();
+  Matrix6d VelocityNoise(double dt) const;  // Q_V dt.
+  // After the prediction: the EKF update with the frame's observations and the removal of
+  // unreliable landmarks; returns the landmarks per image zone. apply_updates false: the frame's
+  // observations of state landmarks are not used (the two-view start, whose points come from
+  // them).
+  std::vector<int> UpdateState(const FrameMeasurement& m, bool apply_updates);
+  // Then: the pose buffer (record of this frame), the candidates, new candidates, the stats and
+  // the frame's pose in `out` and the trajectory.
+  void ManageMap(const FrameMeasurement& m, const PoseRecord& record, std::vector<int> zone_count,
+                 EstimatorOutput* out);
+
   PinholeCamera camera_;
   MonoEkfOptions options_;
   ImageGrid grid_;
@@ -205,6 +271,11 @@ class MonoEkfEstimator : public Estimator {
   Trajectory trajectory_;
   int frame_index_ = -1;
   MonoEkfFrameStats stats_;
+  Prediction prediction_ = Prediction::kUndecided;
+  std::optional<MonoInitializer> initializer_;  // Constant velocity, before its start.
+  double initial_speed_ = 0;                      // |nu_0| (map units per second).
+  int64_t last_t_ns_ = 0;
+  double last_dt_ = 0;
 };
 
 }  // namespace dala

@@ -168,7 +168,7 @@ ImageSequence ReadEurocSequence(const std::string& folder, const DatasetOptions&
     }
     if (seq.t_ns.empty()) {
       throw Error() << mav0 << ": no cam0 image has a cam1 image with the same timestamp; "
-                    << "read the sequence as monocular (force_mono / --mono)";
+                    << "read the sequence as monocular (force_mono / --mode mono)";
     }
 
     // OpenCV's stereo extrinsics map cam0 to cam1: p_c1 = R p_c0 + T, i.e. T_c1_c0.

@@ -48,6 +48,7 @@ class ImageSequenceDataset : public Dataset {
     f.left = Load(seq_.left_files[i], seq_.left_map1, seq_.left_map2);
     if (is_stereo()) f.right = Load(seq_.right_files[i], seq_.right_map1, seq_.right_map2);
     if (!seq_.T_w_c0_gt.empty()) f.T_w_c0_gt = seq_.T_w_c0_gt[i];
+    if (!seq_.T_w_odom.empty()) f.T_w_odom = seq_.T_w_odom[i];
     *frame = std::move(f);
     return true;
   }
@@ -74,6 +75,7 @@ std::unique_ptr<Dataset> MakeImageSequenceDataset(ImageSequence sequence,
   CHECK_EQ(sequence.left_files.size(), n);
   CHECK(sequence.right_files.empty() || sequence.right_files.size() == n);
   CHECK(sequence.T_w_c0_gt.empty() || sequence.T_w_c0_gt.size() == n);
+  CHECK(sequence.T_w_odom.empty() || sequence.T_w_odom.size() == n);
   std::string why;
   CHECK(sequence.rig.IsValid(&why)) << sequence.path << ": " << why;
   CHECK(!sequence.rig.left.HasDistortion()) << "the rig a Dataset yields has no distortion";

@@ -27,6 +27,7 @@ struct ImageSequence {
   std::vector<std::string> left_files;
   std::vector<std::string> right_files;        // Empty when monocular.
   std::vector<std::optional<Pose>> T_w_c0_gt;  // One per frame, or empty without ground truth.
+  std::vector<Pose> T_w_odom;  // Odometry (Frame::T_w_odom): one per frame, or empty without.
   // Remap tables (cv::remap) from the raw to the rectified/undistorted images; empty: none.
   cv::Mat left_map1, left_map2, right_map1, right_map2;
 };

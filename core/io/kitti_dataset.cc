@@ -47,7 +47,7 @@ StereoRig RigFromCalib(const std::string& calib_path, bool stereo) {
     const auto P1 = ReadKittiProjection(calib_path, 1);
     if (!P1) {
       throw Error() << calib_path << ": no 'P1:' row, but image_1/ exists: add P1 or read the "
-                    << "sequence as monocular (force_mono / --mono)";
+                    << "sequence as monocular (force_mono / --mode mono)";
     }
     rig.baseline = -(*P1)(0, 3) / (*P1)(0, 0);
     if (!(rig.baseline > 0)) {
@@ -122,7 +122,7 @@ ImageSequence ReadKittiSequence(const std::string& folder, const DatasetOptions&
       if (!fs::is_regular_file(seq.right_files.back())) {
         throw Error() << "missing right image '" << seq.right_files.back()
                       << "' (the left one exists): restore it or read the sequence as "
-                      << "monocular (force_mono / --mono)";
+                      << "monocular (force_mono / --mode mono)";
       }
     }
   }
@@ -159,6 +159,22 @@ ImageSequence ReadKittiSequence(const std::string& folder, const DatasetOptions&
                     << " images: the ground truth needs one pose per image";
     }
     for (size_t i = 0; i < n; ++i) seq.T_w_c0_gt.push_back(gt.poses[i].T_w_c);
+  }
+  // Optional odometry (TUM: t x y z qx qy qz qw of the left camera), one pose at each image time.
+  const std::string odometry_path = folder + "/odometry.txt";
+  if (fs::is_regular_file(odometry_path)) {
+    const Trajectory odometry = ReadTrajectory(odometry_path, TrajectoryFormat::kTum);
+    size_t k = 0;
+    for (size_t i = 0; i < n; ++i) {
+      // Times match to 1 ms (seconds are written rounded).
+      while (k < odometry.size() && odometry.poses[k].t_ns < seq.t_ns[i] - 1000000) ++k;
+      if (k == odometry.size() || odometry.poses[k].t_ns > seq.t_ns[i] + 1000000) {
+        throw Error() << odometry_path << ": no pose at the time of image " << ImageName(i)
+                      << " (" << 1e-9 * static_cast<double>(seq.t_ns[i]) << " s in times.txt): "
+                      << "the odometry needs one pose per image time (or remove the file)";
+      }
+      seq.T_w_odom.push_back(odometry.poses[k].T_w_c);
+    }
   }
   return seq;
 }

@@ -84,6 +84,7 @@ TEST(SystemE2e, RoverStretchEkfStereoAndMono) {
     SystemOptions options;
     options.estimator = "ekf";
     options.mode = mode;
+    // Mode "mono" alone is one camera now; the paper's setting is mono_stereo_motion.
     options.mono_stereo_motion = options.mode == "mono";
     const SystemRun run = RunSystem(seq, options);
     ASSERT_TRUE(run.eval.ok) << run.eval.error;
@@ -100,8 +101,21 @@ TEST(SystemE2e, UnsupportedCombinationIsAClearError) {
   sim::SimOptions sim;
   sim.frames = 2;
   const sim::SyntheticSequence seq(sim);
+  // ba/mono exists since the monocular BA (it used to be the unsupported example); a rig that
+  // does not suit the estimator's mode is refused with a clear message.
   SystemOptions options;
   options.estimator = "ba";
+  options.mode = "mono";
+  EXPECT_NO_THROW(System(seq.rig(), options));
+  StereoRig mono_rig = seq.rig();
+  mono_rig.baseline = 0.0;
+  options.mode = "stereo";
+  try {
+    MakeEstimator(mono_rig, options);
+    ADD_FAILURE() << "ba/stereo on a monocular rig should be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("needs a stereo rig"), std::string::npos) << e.what();
+  }
   options.mode = "mono";
   options.mono_stereo_motion = true;  // An option of the mono EKF only.
   try {

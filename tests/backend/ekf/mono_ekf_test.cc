@@ -140,7 +140,11 @@ TEST(MonoEkfTest, NoScaleMeansNoPrediction) {
   o.frames = 5;
   o.stereo = false;
   SimStream s = Simulate(o);
-  MonoEkfEstimator ekf(s.rig.left);
+  // The paper's model ("motion"): "auto" would take the constant-velocity model at frame 1,
+  // which has no metric motion.
+  MonoEkfOptions options;
+  options.prediction = "motion";
+  MonoEkfEstimator ekf(s.rig.left, options);
   EXPECT_TRUE(ekf.Add(s.frames[0]).valid);
   FrameMeasurement m = s.frames[1];
   m.motion->scale_known = false;  // Monocular visual motion: unit translation.

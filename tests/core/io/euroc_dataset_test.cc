@@ -158,6 +158,15 @@ TEST(EurocDataset, Errors) {
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("cam1/data.csv:3: missing image"));
   }
   {
+    // No cam1 image pairs with a cam0 one: the message names the `dala run` flag that exists.
+    const std::string seq = fresh("unpaired");
+    WriteText(seq + "/mav0/cam1/data.csv", "#h\n1," + std::to_string(kT0) + ".png\n");
+    const std::string msg = ErrorOf([&] { OpenDataset(seq); });
+    EXPECT_THAT(msg, HasSubstr("no cam0 image has a cam1 image"));
+    EXPECT_THAT(msg, HasSubstr("--mode mono"));
+    EXPECT_THAT(msg, ::testing::Not(HasSubstr("--mono)")));
+  }
+  {
     const std::string seq = fresh("bad_stamp");
     WriteText(seq + "/mav0/cam0/data.csv", "12.5e3,a.png\n");
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("integer nanoseconds"));

@@ -24,6 +24,34 @@ using testing::WriteText;
 
 double MaxAbsDiff(const cv::Mat& a, const cv::Mat& b) { return cv::norm(a, b, cv::NORM_INF); }
 
+// odometry.txt (TUM, as `dala synth --odometry` writes it): one pose per image time, in
+// Frame::T_w_odom; absent file: no odometry.
+TEST(KittiDataset, ReadsOdometry) {
+  TempDir dir;
+  const std::string seq = dir / "seq";
+  WriteKittiFolder(seq, KittiFixture());
+  {
+    auto dataset = OpenDataset(seq);
+    Frame frame;
+    ASSERT_TRUE(dataset->Next(&frame));
+    EXPECT_FALSE(frame.T_w_odom.has_value());
+  }
+  // A sample before the first image is skipped; times match to the rounding of the file.
+  WriteText(seq + "/odometry.txt",
+            "-0.1 9 9 9 0 0 0 1\n0 0 0 0 0 0 0 1\n0.1000000004 1 0 0 0 0 0 1\n"
+            "0.2 2 0 0 0 0 0.7071067811865476 0.7071067811865476\n0.3 3 0 0 0 0 0 1\n");
+  DatasetOptions mono;
+  mono.force_mono = true;
+  auto dataset = OpenDataset(seq, mono);
+  Frame frame;
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(dataset->Next(&frame));
+    ASSERT_TRUE(frame.T_w_odom.has_value()) << i;
+    EXPECT_NEAR(frame.T_w_odom->translation().x(), i, 1e-12);
+  }
+  EXPECT_NEAR(frame.T_w_odom->linear()(0, 0), 1.0, 1e-12);
+}
+
 TEST(KittiDataset, ReadsStereoFixture) {
   TempDir dir;
   const std::string seq = dir / "seq";
@@ -149,6 +177,7 @@ TEST(KittiDataset, ErrorsNameTheFileAndTheFix) {
     const std::string seq = fresh("no_p1");
     WriteText(seq + "/calib.txt", "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n");
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("no 'P1:' row"));
+    EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("(force_mono / --mode mono)"));
     DatasetOptions mono;
     mono.force_mono = true;
     EXPECT_NO_THROW(OpenDataset(seq, mono));
@@ -166,8 +195,9 @@ TEST(KittiDataset, ErrorsNameTheFileAndTheFix) {
   {
     const std::string seq = fresh("missing_right");
     std::filesystem::remove(seq + "/image_1/" + KittiName(2));
-    EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }),
-                HasSubstr("missing right image '" + seq + "/image_1/000002.png'"));
+    const std::string msg = ErrorOf([&] { OpenDataset(seq); });
+    EXPECT_THAT(msg, HasSubstr("missing right image '" + seq + "/image_1/000002.png'"));
+    EXPECT_THAT(msg, HasSubstr("(force_mono / --mode mono)"));
   }
   {
     const std::string seq = fresh("misnumbered");
@@ -178,6 +208,13 @@ TEST(KittiDataset, ErrorsNameTheFileAndTheFix) {
     const std::string seq = fresh("short_poses");
     WriteText(seq + "/poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n");
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("has 1 poses for 4 images"));
+  }
+  {
+    const std::string seq = fresh("short_odometry");
+    WriteText(seq + "/odometry.txt", "0 0 0 0 0 0 0 1\n0.1 0 0 1 0 0 0 1\n");
+    const std::string msg = ErrorOf([&] { OpenDataset(seq); });
+    EXPECT_THAT(msg, HasSubstr(seq + "/odometry.txt: no pose at the time of image 000002.png"));
+    EXPECT_THAT(msg, HasSubstr("one pose per image time"));
   }
   {
     const std::string seq = fresh("wrong_size");
