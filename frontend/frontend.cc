@@ -151,9 +151,20 @@ std::optional<MotionEstimate> Frontend::TrackFromPrevious(
       // No epipolar geometry (pure rotation), or a degenerate one that keeps few of the matches
       // (a plane: flying over flat ground): the homography verifies the tracks instead, so the
       // landmark ids live on (and the estimator can say why it does not start).
+      // A track is kept when either model verifies it (the union of the inliers), the motion
+      // is the model with more inliers.
       if (!a.motion || 2 * a.motion->estimate.inliers < static_cast<int>(a.matches.size())) {
         std::optional<MotionResult> h = motion_estimator_.EstimateRotation(uv_prev, uv_cur);
-        if (h && (!a.motion || h->estimate.inliers > a.motion->estimate.inliers)) {
+        if (h && a.motion) {
+          MotionResult& best = h->estimate.inliers > a.motion->estimate.inliers ? *h : *a.motion;
+          const MotionResult& other = &best == &*h ? *a.motion : *h;
+          for (size_t k = 0; k < best.inlier.size(); ++k) {
+            best.inlier[k] = best.inlier[k] || other.inlier[k];
+          }
+          best.estimate.inliers =
+              static_cast<int>(std::count(best.inlier.begin(), best.inlier.end(), true));
+          if (&best == &*h) a.motion = std::move(h);
+        } else if (h) {
           a.motion = std::move(h);
         }
       }

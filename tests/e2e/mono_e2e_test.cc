@@ -16,8 +16,10 @@ namespace {
 
 // Bounds: at most 1.5x the value measured on this commit (printed as "[ measured ]").
 // Runs are bit-identical (deterministic), so no noise margin is added.
-constexpr double kRoverAteFraction = 0.00067;  // measured 0.000446 (0.0125 m over 28.0 m).
-constexpr double kBlackAteFraction = 0.00087;  // measured 0.000582.
+// The rover stretch measured 0.000446 before the homography verified the tracks of a weak
+// essential matrix, which took flight (400 frames) from lost to 0.023 % (docs/monocular.md).
+constexpr double kRoverAteFraction = 0.0020;   // measured 0.00133 (0.0373 m over 28.0 m).
+constexpr double kBlackAteFraction = 0.00087;  // measured 0.000677 (0.000582 before).
 constexpr double kKittiAteMetres = 0.061;      // measured 0.0409 m.
 
 struct MonoRun {
