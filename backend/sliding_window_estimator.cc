@@ -41,6 +41,17 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   return mono_init.IsValid(why);
 }
 
+bool SlidingWindowEstimatorOptions::IsValidFor(const StereoRig& rig, std::string* why) const {
+  if (!IsValid(why)) return false;
+  // One camera: the gauge is 7 dof (pose + scale); two held keyframes carry it (0 or 1 leave
+  // the scale free: measured 6-11 m ATE on KITTI 06 with 1).
+  if (!rig.is_stereo() && ba.num_fixed_keyframes >= 0 && ba.num_fixed_keyframes < 2) {
+    if (why) *why = "ba.num_fixed_keyframes must be >= 2 (or -1, automatic) with one camera";
+    return false;
+  }
+  return true;
+}
+
 namespace {
 
 // Information matrices of the pose-graph edges ([rotation; translation], core/geometry.h).
@@ -90,7 +101,7 @@ SlidingWindowEstimator::SlidingWindowEstimator(const StereoRig& rig,
                                                const SlidingWindowEstimatorOptions& options)
     : rig_(rig), options_(options), ba_(IntrinsicsOf(rig), options.ba) {
   std::string why;
-  CHECK(options_.IsValid(&why)) << why;
+  CHECK(options_.IsValidFor(rig_, &why)) << why;
   CHECK(!rig_.left.HasDistortion()) << "SlidingWindowEstimator expects rectified images";
   if (!rig_.is_stereo()) initializer_.emplace(rig_.left, options_.mono_init);
 }
@@ -348,13 +359,15 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
   for (size_t j = 0; j < init.between.size(); ++j) {
     const FrameMeasurement& f = init.between[j];
     const double s = span > 0 ? (f.t_ns - init.reference.t_ns) / span : 0.5;
-    const Pose guess = InterpolatePose(Pose::Identity(), keyframe_poses_.at(current), s);
+    const Pose guess =
+        InterpolatePose(keyframe_poses_.at(reference), keyframe_poses_.at(current), s);
     const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(f), guess, options_.pose_only);
     if (r.status != PoseOnlyStatus::kOk) {
       T_w_last.reset();
       continue;
     }
-    frames_[reference_index + 1 + j] = {f.t_ns, reference, r.T_w_c, true};
+    frames_[reference_index + 1 + j] = {f.t_ns, reference,
+                                        keyframe_poses_.at(reference).inverse() * r.T_w_c, true};
     T_w_last = r.T_w_c;
   }
   frames_.push_back({init.current.t_ns, current, Pose::Identity(), true});
@@ -363,9 +376,13 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
   velocity_ = T_w_last ? T_w_last->inverse() * T_w_prev_
                        : InterpolatePose(Pose::Identity(), T_w_prev_,
                                          1.0 / static_cast<double>(init.between.size() + 1));
-  last_keyframe_ = current;
+  RememberLastKeyframe(current, init.current);
+}
+
+void SlidingWindowEstimator::RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m) {
+  last_keyframe_ = id;
   last_keyframe_observations_.clear();
-  for (const FeatureObservation& o : init.current.observations) {
+  for (const FeatureObservation& o : m.observations) {
     last_keyframe_observations_[o.landmark] = ToBa(o);
   }
 }
@@ -420,13 +437,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     keyframe_poses_[kf.id] = T_w_c;
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});
     keyframe_of_frame_[m.frame] = kf.id;
-    if (!stereo) {
-      last_keyframe_ = kf.id;
-      last_keyframe_observations_.clear();
-      for (const FeatureObservation& o : m.observations) {
-        last_keyframe_observations_[o.landmark] = ToBa(o);
-      }
-    }
+    if (!stereo) RememberLastKeyframe(kf.id, m);
     ReportLandmarks(&out);
     if (options_.background_solve) {
       solved_in_background_ = kf.id;

@@ -119,6 +119,8 @@ struct SlidingWindowEstimatorOptions {
   uint64_t recovery_seed = 42;        // Of the mono PnP recovery's RANSAC.
 
   bool IsValid(std::string* why) const;
+  // IsValid and what the rig adds (one camera: a gauge of at least two held keyframes).
+  bool IsValidFor(const StereoRig& rig, std::string* why) const;
 };
 
 class SlidingWindowEstimator : public Estimator {
@@ -157,6 +159,9 @@ class SlidingWindowEstimator : public Estimator {
   // of a landmark with a position (the window's and older ones: relocalisation in the map) by
   // RANSAC PnP (OpenCV EPnP, seeded), then pose-only over them; nullopt if too few agree.
   std::optional<Pose> RecoverPose(const FrameMeasurement& m) const;
+  // Mono: keyframe `id` (frame m) is the last one; its observations are the candidates for new
+  // landmarks at the next keyframe.
+  void RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m);
   // landmarks_in_state and local_map of `out` from the window.
   void ReportLandmarks(EstimatorOutput* out) const;
   Pose KeyframePoseNow(KeyframeId id) const;

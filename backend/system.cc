@@ -49,6 +49,9 @@ System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), 
   }
   // Mode "mono" is one camera: the right image, if any, is never used.
   if (options_.mode == "mono" && !options_.mono_stereo_motion) rig_.baseline = 0.0;
+  if (options_.estimator == "ba" && !options_.ba.IsValidFor(rig_, &why)) {
+    throw Error() << "invalid options: " << why;
+  }
   estimator_ = MakeEstimator(rig_, options_);
   frontend_ = std::make_unique<Frontend>(rig_, options_.frontend);
 }
@@ -95,7 +98,9 @@ TrackResult System::Track(const Frame& frame) {
   s.estimator_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
   s.total_ms = std::chrono::duration<double, std::milli>(t2 - t0).count();
   stats_.push_back(s);
-  if (m.is_keyframe) RecordKeyframe();
+  // A mono keyframe the estimator could not place is no keyframe of the map (it has a guessed
+  // pose); a stereo one always joins the window.
+  if (m.is_keyframe && (e.valid || rig_.is_stereo())) RecordKeyframe();
 
   TrackResult r;
   r.status = s.status;

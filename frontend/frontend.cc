@@ -349,11 +349,12 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     if (motion) {
       // Monocular: the essential matrix gives the direction, not the length: keep the previous
       // step's length (read before the velocity is replaced; the first step has length 1).
-      const double previous_step = velocity_T_prev_cur_.translation().norm();
+      // A rotation-only motion (EstimateRotation) has no translation: the step length is kept
+      // for the next frame that has one.
+      const double step = velocity_T_prev_cur_.translation().norm();
+      if (step > 0) mono_step_length_ = step;
       velocity_T_prev_cur_ = motion->T_prev_cur;
-      if (!motion->scale_known) {
-        velocity_T_prev_cur_.translation() *= previous_step > 0 ? previous_step : 1.0;
-      }
+      if (!motion->scale_known) velocity_T_prev_cur_.translation() *= mono_step_length_;
     }
     // Lost: assume the last velocity for this frame (the gap is flagged by the status).
     cur.T_w_c = Orthonormalized(prev_->T_w_c * velocity_T_prev_cur_);
@@ -439,7 +440,10 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     }
     out.observations.push_back(o);
   }
-  local_map_search_.Remember(cur.id, cur.detection, cur.landmark, cur.track_length);
+  // Appearances are kept only where the System hands over local maps (System::Track).
+  if (!stereo || options_.local_map.stereo) {
+    local_map_search_.Remember(cur.id, cur.detection, cur.landmark, cur.track_length);
+  }
   if (out.is_keyframe) {
     keyframe_ = cur;
     frames_since_keyframe_ = 0;

@@ -150,6 +150,7 @@ class Frontend {
   std::optional<TrackedFrame> keyframe_;
   std::optional<TrackedFrame> tracked_keyframe_;  // The last keyframe the estimator tracked.
   Pose velocity_T_prev_cur_ = Pose::Identity();
+  double mono_step_length_ = 1.0;  // One camera: the last non-zero dead-reckoned step (no unit).
   Pose T_w_cur_ = Pose::Identity();
   double path_length_m_ = 0.0;  // Dead-reckoned distance travelled.
   int64_t next_landmark_ = 0;

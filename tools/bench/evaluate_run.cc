@@ -63,6 +63,10 @@ bool ReadReport(const std::string& path, BenchRunResult* r, RunSeries* series) {
       series->ms_estimator.push_back(NumberAt(f, {"ms", "estimator"}).value_or(std::nan("")));
     }
     r->frames = static_cast<int>(report["frames"].size());
+    if (!report["frames"].empty() && report["frames"].back().contains("note") &&
+        report["frames"].back()["note"].is_string()) {
+      series->last_note = report["frames"].back()["note"].get<std::string>();
+    }
   }
   r->ms_median = Percentile(series->ms_total, 50.0);
   r->ms_p95 = Percentile(series->ms_total, 95.0);
@@ -191,7 +195,13 @@ void EvaluateRun(const BenchRun& run, const SubprocessResult& child, const std::
     est = ReadTrajectory(traj, TrajectoryFormat::kTum);
   } catch (const Error& e) {
     r->status = kStatusFailed;
-    AppendError(r, e.what());
+    // A monocular run that never initialised has no pose to evaluate: say why, not just that.
+    if (series->last_note.rfind("initialising: ", 0) == 0) {
+      AppendError(r, "no frame has a pose, the monocular map never started; last frame: " +
+                         series->last_note);
+    } else {
+      AppendError(r, e.what());
+    }
     return;
   }
   // SE(3) for stereo (metric scale observable), Sim(3) for monocular (scale free). RPE over 1

@@ -26,6 +26,7 @@ std::optional<Trajectory> LoadGroundTruth(const std::string& folder, std::string
 struct RunSeries {
   std::vector<double> frame, ms_total, ms_frontend, ms_estimator;  // From report.json.
   std::vector<double> distance_m, ate_m;  // ATE of every pair against the path travelled.
+  std::string last_note;  // The last frame's "note" (e.g. "initialising: <reason>").
 };
 
 // Fills `result` (whose identity fields, command and run_dir are set) from the child's exit and
