@@ -226,6 +226,8 @@ int RunRun(const std::vector<std::string>& args) {
         {"max", loop_ms.empty() ? 0.0 : *std::max_element(loop_ms.begin(), loop_ms.end())}}},
       {"landmarks", points.size()}};
   const auto& gt = dataset->ground_truth();
+  bool plotted = false;
+  std::string evaluation_error;
   if (gt && !gt->empty()) {
     EvalOptions eval;
     eval.alignment = options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
@@ -235,6 +237,9 @@ int RunRun(const std::vector<std::string>& args) {
     if (result.ok) {
       PlotEvaluation(*gt, AlignTrajectory(trajectory, result.alignment), result,
                      dir + "/trajectory.png");
+      plotted = true;
+    } else {
+      evaluation_error = result.error;
     }
   }
   nlohmann::json frames = nlohmann::json::array();
@@ -264,6 +269,7 @@ int RunRun(const std::vector<std::string>& args) {
     for (const auto& w : summary["warnings"])
       std::cout << "note        " << w.get<std::string>() << "\n";
   }
+  if (!evaluation_error.empty()) std::cout << "evaluation  not done: " << evaluation_error << "\n";
   if (trajectory.size() < stats.size()) {
     std::cout << "note        " << stats.size() - trajectory.size()
               << " frames have no pose (before the monocular initialisation): trajectory files "
@@ -271,7 +277,7 @@ int RunRun(const std::vector<std::string>& args) {
                  "(trajectory.txt)\n";
   }
   std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
-            << "map.dmap, report.json" << (gt ? ", trajectory.png" : "") << ")\n";
+            << "map.dmap, report.json" << (plotted ? ", trajectory.png" : "") << ")\n";
   return 0;
 }
 
