@@ -420,7 +420,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
               << WindowObservations(m).size() << " observations of mapped landmarks)";
     }
   }
-  if (!stereo && !out.valid && !first) {
+  if (!out.valid && !first) {
     if (const std::optional<Pose> recovered = RecoverPose(m)) {
       T_w_c = *recovered;
       out.valid = true;

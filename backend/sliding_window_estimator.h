@@ -155,7 +155,7 @@ class SlidingWindowEstimator : public Estimator {
   void StartMonoMap(const MonoInitialization& init);
   // The initial guess of the current frame's pose (see the class comment).
   Pose PredictPose(const FrameMeasurement& m) const;
-  // Mono: when pose-only tracking from the predicted pose fails, the pose from every observation
+  // When pose-only tracking from the predicted pose fails, the pose from every observation
   // of a landmark with a position (the window's and older ones: relocalisation in the map) by
   // RANSAC PnP (OpenCV EPnP, seeded), then pose-only over them; nullopt if too few agree.
   std::optional<Pose> RecoverPose(const FrameMeasurement& m) const;

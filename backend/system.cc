@@ -77,7 +77,9 @@ TrackResult System::Track(const Frame& frame) {
   const auto t1 = Clock::now();
   EstimatorOutput e = estimator_->Add(m);
   const LocalMapSearchOptions& search = options_.frontend.local_map;
-  if (!e.local_map.empty() && search.enable && (!rig_.is_stereo() || search.stereo)) {
+  // Stereo runs get it too, for the relocalisation after a lost frame; their guided search and
+  // keyframe evidence use it only with local_map.stereo (frontend.h).
+  if (!e.local_map.empty() && search.enable) {
     frontend_->SetLocalMap({frame.id, e.T_w_c, e.valid, std::move(e.local_map)});
   }
   const auto t2 = Clock::now();

@@ -368,14 +368,19 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   if (options_.match_keyframe && motion && keyframe_ && keyframe_->id != prev_->id) {
     ReacquireFromKeyframe(&cur);
   }
-  if (prev_) {
+  // The guided local-map search: one camera, or stereo when asked (local_map.stereo). The
+  // relocalisation after a lost frame: both.
+  const bool guided = !stereo || options_.local_map.stereo;
+  if (prev_ && guided) {
     std::optional<Pose> T_prev_cur;
     if (motion) T_prev_cur = motion->T_prev_cur;
     const int found = local_map_search_.Search(prev_->id, T_prev_cur,
                                                motion && motion->scale_known, cur.detection,
                                                &cur.landmark, &cur.track_length);
     VLOG(2) << "frame " << frame.id << ": " << found << " points found in the local map";
-    if (tracked_keyframe_ && local_map_search_.LostAt(prev_->id)) RelocalizeFromKeyframe(&cur);
+  }
+  if (prev_ && tracked_keyframe_ && local_map_search_.LostAt(prev_->id)) {
+    RelocalizeFromKeyframe(&cur);
   }
   for (size_t i = 0; i < n; ++i) {
     if (!cur.landmark[i].valid()) cur.landmark[i] = LandmarkId(next_landmark_++);
@@ -392,7 +397,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     // The keyframe's landmarks the evidence counts: with a local map (one camera), those the
     // estimator maps, since most detections never become landmarks and would make every frame
     // a keyframe (KITTI: ~30 % of the detections are tracked to the next frame); else all.
-    const bool mapped_only = local_map_search_.has_map();
+    const bool mapped_only = local_map_search_.has_map() && guided;
     std::unordered_map<LandmarkId, Eigen::Vector2d> kf_uv;
     for (size_t i = 0; i < keyframe_->landmark.size(); ++i) {
       if (mapped_only && !local_map_search_.IsMapped(keyframe_->landmark[i])) continue;
