@@ -49,6 +49,11 @@ StereoRig RigFromCalib(const std::string& calib_path, bool stereo) {
       throw Error() << calib_path << ": no 'P1:' row, but image_1/ exists: add P1 or read the "
                     << "sequence as monocular (force_mono / --mode mono)";
     }
+    if (!((*P1)(0, 0) > 0)) {
+      throw Error() << calib_path << ": P1(0,0) = " << (*P1)(0, 0)
+                    << " is not a focal length; expected fx > 0 (the rectified right camera's "
+                       "P1 = [fx 0 cx -fx*baseline; 0 fy cy 0; 0 0 1 0])";
+    }
     rig.baseline = -(*P1)(0, 3) / (*P1)(0, 0);
     if (!(rig.baseline > 0)) {
       throw Error() << calib_path << ": P1 gives baseline " << rig.baseline

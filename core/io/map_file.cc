@@ -189,10 +189,12 @@ SavedMap ReadMapFile(const std::string& path) {
   try {
     for (size_t i = 0; i < sizeof(kMagic); ++i) r.Get<char>("the header");
     r.Get<uint32_t>("the version");
-    map.descriptor_size = static_cast<int>(r.Get<uint32_t>("the descriptor size"));
-    if (map.descriptor_size > 4096) {
-      throw Error() << path << ": implausible descriptor size " << map.descriptor_size;
+    // Checked while unsigned: 0xFFFFFFFF cast to int is -1, which passed a signed check.
+    const uint32_t descriptor_size = r.Get<uint32_t>("the descriptor size");
+    if (descriptor_size > 4096) {
+      throw Error() << path << ": implausible descriptor size " << descriptor_size;
     }
+    map.descriptor_size = static_cast<int>(descriptor_size);
     const size_t point_bytes = 8 + 16 + 8 + 4 * static_cast<size_t>(map.descriptor_size);
     const uint64_t num_keyframes = r.GetCount("keyframes", 8 + 8 + 56 + 8);
     map.keyframes.resize(num_keyframes);

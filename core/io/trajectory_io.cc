@@ -165,8 +165,11 @@ void WriteTrajectoryTum(const std::string& path, const Trajectory& trajectory) {
     for (const StampedPose& p : trajectory.poses) {
       const Eigen::Quaterniond q(p.T_w_c.linear());
       const Eigen::Vector3d t = p.T_w_c.translation();
-      os << p.t_ns / 1000000000LL << "." << std::setw(9) << std::setfill('0')
-         << std::abs(p.t_ns % 1000000000LL) << std::setfill(' ') << std::setprecision(9)
+      // Sign, whole seconds and nanoseconds apart: t_ns / 1e9 truncates towards zero, so a time
+      // in (-1 s, 0) has 0 whole seconds and its sign would be lost.
+      os << (p.t_ns < 0 ? "-" : "") << std::abs(p.t_ns / 1000000000LL) << "." << std::setw(9)
+         << std::setfill('0') << std::abs(p.t_ns % 1000000000LL) << std::setfill(' ')
+         << std::setprecision(9)
          << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " "
          << q.z() << " " << q.w() << "\n";
     }

@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -120,6 +122,23 @@ TEST(MapFileTest, BadFilesGiveClearErrors) {
   flipped[good.size() / 3] ^= 0x10;
   WriteBytes(dir / "f.dmap", flipped);
   EXPECT_THAT(ReadError(dir / "f.dmap"), HasSubstr("corrupted"));
+}
+
+// A crafted file with a valid checksum and descriptor size 0xFFFFFFFF: a clear error (it used
+// to pass the size check as int -1 and abort in std::vector::resize with std::length_error).
+TEST(MapFileTest, HugeDescriptorSizeWithAValidChecksumIsAClearError) {
+  testing::TempDir dir;
+  WriteMapFile(dir / "m.dmap", MakeMap(121));
+  std::string bytes = ReadBytes(dir / "m.dmap");
+  for (size_t i = 12; i < 16; ++i) bytes[i] = static_cast<char>(0xFF);  // After magic, version.
+  uint64_t hash = 0xcbf29ce484222325ull;  // FNV-1a of the body, as the writer computes it.
+  for (size_t i = 0; i + 8 < bytes.size(); ++i) {
+    hash ^= static_cast<unsigned char>(bytes[i]);
+    hash *= 0x100000001b3ull;
+  }
+  std::memcpy(&bytes[bytes.size() - 8], &hash, sizeof(hash));
+  WriteBytes(dir / "crafted.dmap", bytes);
+  EXPECT_THAT(ReadError(dir / "crafted.dmap"), HasSubstr("implausible descriptor size 4294967295"));
 }
 
 TEST(MapFileTest, DescriptorSizeMismatchIsRefusedAndWritesNothing) {

@@ -42,6 +42,20 @@ TEST(TrajectoryIo, TumRoundTrip) {
   }
 }
 
+// Times between -1 s and 0 keep their sign (they used to be written as positive, and the
+// reader then refused the file as going back in time).
+TEST(TrajectoryIo, TumKeepsTheSignOfTimesBetweenMinusOneAndZero) {
+  testing::TempDir dir;
+  Trajectory t;
+  for (const int64_t t_ns : {-1500000000LL, -999999999LL, -500000000LL, -1LL, 0LL, 250000000LL}) {
+    t.Add(t_ns, Pose::Identity());
+  }
+  WriteTrajectoryTum(dir / "t.txt", t);
+  const Trajectory r = ReadTrajectory(dir / "t.txt");
+  ASSERT_EQ(r.size(), t.size());
+  for (size_t i = 0; i < t.size(); ++i) EXPECT_EQ(r.poses[i].t_ns, t.poses[i].t_ns) << i;
+}
+
 TEST(TrajectoryIo, KittiRoundTripAndTimes) {
   testing::TempDir dir;
   const Trajectory t = RandomTrajectory(5);
