@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
-#include <sstream>
+
+#include "core/cv_pose.h"
 
 namespace dala {
 
@@ -264,13 +266,7 @@ std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& 
             << object.size() << ")";
     return std::nullopt;
   }
-  cv::Mat R_cv;
-  cv::Rodrigues(rvec, R_cv);
-  Eigen::Matrix3d R_c_w;
-  Eigen::Vector3d t_c_w;
-  cv::cv2eigen(R_cv, R_c_w);
-  cv::cv2eigen(tvec, t_c_w);
-  const Pose guess = MakePose(R_c_w, t_c_w).inverse();
+  const Pose guess = PoseFromRvecTvec(rvec, tvec).inverse();  // OpenCV gives T_c_w.
   // Refined over every known landmark (the window's and older ones), outliers rejected.
   const PoseOnlyResult r = EstimatePoseOnly(
       IntrinsicsOf(rig_), observations,
@@ -407,17 +403,14 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
       out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
     }
     // Pose-only tracking against the window (a keyframe: before it joins the window).
-    const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(m), T_w_c, options_.pose_only);
-    VLOG(2) << "frame " << m.frame << ": pose-only " << PoseOnlyStatusName(r.status) << ", "
-            << r.num_inliers << " inliers of " << WindowObservations(m).size()
-            << " mapped observations";
+    const std::vector<BaObservation> mapped = WindowObservations(m);
+    const PoseOnlyResult r = ba_.TrackFrame(mapped, T_w_c, options_.pose_only);
+    VLOG(r.status == PoseOnlyStatus::kOk ? 2 : 1)
+        << "frame " << m.frame << ": pose-only " << PoseOnlyStatusName(r.status) << ", "
+        << r.num_inliers << " inliers of " << mapped.size() << " observations of mapped landmarks";
     if (r.status == PoseOnlyStatus::kOk) {
       T_w_c = r.T_w_c;
       out.valid = true;
-    } else {
-      VLOG(1) << "frame " << m.frame << ": pose-only tracking failed ("
-              << PoseOnlyStatusName(r.status) << ", " << r.num_inliers << " inliers of "
-              << WindowObservations(m).size() << " observations of mapped landmarks)";
     }
   }
   if (!out.valid && !first) {

@@ -10,22 +10,14 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "core/cv_pose.h"
+
 namespace dala {
 namespace {
 
 // 95 % chi-square quantiles for the residual dimensions we use.
 double Chi2Gate95(int dof, double gate_3dof) {
   return dof == 3 ? gate_3dof : (dof == 2 ? 5.991 : 3.841);
-}
-
-Pose PoseFromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
-  cv::Mat R_cv;
-  cv::Rodrigues(rvec, R_cv);
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  cv::cv2eigen(R_cv, R);
-  cv::cv2eigen(tvec, t);
-  return MakePose(R, t);
 }
 
 }  // namespace

@@ -259,11 +259,12 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   result.homography_score_ratio = score_h / std::max(score_h + score_e, 1e-30);
   const bool use_h = !have_e || (have_h && result.homography_score_ratio > options.homography_ratio);
 
+  // The chosen model's RANSAC inliers: what is triangulated and what the parallax tests see.
+  const std::vector<bool> inlier = MaskToVector(use_h ? mask_h : mask_e, n);
+  result.num_inliers = static_cast<int>(std::count(inlier.begin(), inlier.end(), true));
   Reconstruction best;
   if (use_h) {
     result.model = TwoViewModel::kHomography;
-    const std::vector<bool> inlier = MaskToVector(mask_h, n);
-    result.num_inliers = static_cast<int>(std::count(inlier.begin(), inlier.end(), true));
     std::vector<cv::Mat> Rs, ts, normals;
     cv::decomposeHomographyMat(H_cv, K_cv, Rs, ts, normals);
     int second_good = 0;
@@ -295,8 +296,6 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
     cv::Mat mask = mask_e.clone();
     // recoverPose: the (R, t) of E's four with the most points in front, x_cur = R x_ref + t.
     cv::recoverPose(E_cv, a, b, K_cv, R_cv, t_cv, mask);
-    const std::vector<bool> inlier = MaskToVector(mask_e, n);
-    result.num_inliers = static_cast<int>(std::count(inlier.begin(), inlier.end(), true));
     Eigen::Matrix3d R;
     Eigen::Vector3d t;
     cv::cv2eigen(R_cv, R);
@@ -307,8 +306,7 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   result.median_parallax_deg = best.median_parallax_deg;
   // A pure rotation first (see ResidualParallaxDeg), then too little parallax: the usual causes
   // of too few triangulated points.
-  const std::vector<bool> model_inlier = MaskToVector(use_h ? mask_h : mask_e, n);
-  result.residual_parallax_deg = ResidualParallaxDeg(camera, uv_ref, uv_cur, model_inlier);
+  result.residual_parallax_deg = ResidualParallaxDeg(camera, uv_ref, uv_cur, inlier);
   if (result.residual_parallax_deg < options.min_residual_parallax_deg) {
     result.reason = Format("too little parallax beyond a pure rotation: median",
                            result.residual_parallax_deg, "<", options.min_residual_parallax_deg,
