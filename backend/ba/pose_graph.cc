@@ -66,13 +66,31 @@ bool PoseGraphOptions::IsValid(std::string* why) const {
   return true;
 }
 
+void SolvePoseGraphProblem(const PoseGraphOptions& options, ceres::Problem* problem,
+                           PoseGraphSummary* s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  solver_options.max_num_iterations = options.max_num_iterations;
+  solver_options.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary ceres_summary;
+  ceres::Solve(solver_options, problem, &ceres_summary);
+  s->usable = ceres_summary.IsSolutionUsable();
+  s->num_iterations = static_cast<int>(ceres_summary.iterations.size());
+  s->initial_cost = ceres_summary.initial_cost;
+  s->final_cost = ceres_summary.final_cost;
+  s->time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 std::map<KeyframeId, Pose> OptimizePoseGraph(const std::map<KeyframeId, Pose>& T_w_kf,
                                              const std::vector<PoseGraphEdge>& edges,
                                              const PoseGraphOptions& options,
                                              PoseGraphSummary* summary) {
   std::string why;
   CHECK(options.IsValid(&why)) << "invalid PoseGraphOptions: " << why;
-  const auto t0 = std::chrono::steady_clock::now();
   PoseGraphSummary local;
   PoseGraphSummary& s = summary ? *summary : local;
   s = PoseGraphSummary();
@@ -99,20 +117,7 @@ std::map<KeyframeId, Pose> OptimizePoseGraph(const std::map<KeyframeId, Pose>& T
     problem.AddResidualBlock(RelativePoseError::Create(e.T_from_to, sqrt_info), loss.get(),
                              blocks.at(e.from).data(), blocks.at(e.to).data());
   }
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  solver_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-  solver_options.max_num_iterations = options.max_num_iterations;
-  solver_options.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
-  solver_options.num_threads = options.num_threads;
-  solver_options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary ceres_summary;
-  ceres::Solve(solver_options, &problem, &ceres_summary);
-  s.usable = ceres_summary.IsSolutionUsable();
-  s.num_iterations = static_cast<int>(ceres_summary.iterations.size());
-  s.initial_cost = ceres_summary.initial_cost;
-  s.final_cost = ceres_summary.final_cost;
-  s.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  SolvePoseGraphProblem(options, &problem, &s);
   if (!s.usable) return T_w_kf;
   std::map<KeyframeId, Pose> out;
   for (const auto& [id, x] : blocks) out[id] = BlockToPose(x);

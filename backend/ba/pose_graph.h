@@ -23,6 +23,10 @@
 #include "core/geometry.h"
 #include "core/types.h"
 
+namespace ceres {
+class Problem;
+}  // namespace ceres
+
 namespace dala {
 
 struct PoseGraphEdge {
@@ -58,6 +62,11 @@ std::map<KeyframeId, Pose> OptimizePoseGraph(const std::map<KeyframeId, Pose>& T
                                              const std::vector<PoseGraphEdge>& edges,
                                              const PoseGraphOptions& options,
                                              PoseGraphSummary* summary = nullptr);
+
+// Solves a built pose-graph problem (SE(3) or Sim(3)) with `options` and fills `summary`
+// (usable, iterations, costs, wall time of the solve). Shared by the two graphs.
+void SolvePoseGraphProblem(const PoseGraphOptions& options, ceres::Problem* problem,
+                           PoseGraphSummary* summary);
 
 }  // namespace dala
 
