@@ -27,7 +27,11 @@ bool BaLoopClosureOptions::IsValid(std::string* why) const {
     if (why) *why = "loop edge sigmas must be > 0 (the per-metre ones >= 0)";
     return false;
   }
-  return true;
+  if (!(mono_scale_sigma > 0 && mono_loop_scale_sigma > 0)) {
+    if (why) *why = "loop.ba_mono_scale_sigma and loop.ba_mono_loop_scale_sigma must be > 0";
+    return false;
+  }
+  return sim3.IsValid(why);
 }
 
 bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
@@ -55,29 +59,6 @@ bool SlidingWindowEstimatorOptions::IsValidFor(const StereoRig& rig, std::string
 }
 
 namespace {
-
-// Information matrices of the pose-graph edges ([rotation; translation], core/geometry.h).
-struct LoopClosureInformation {
-  BaLoopClosureOptions o;
-  Matrix6d Odometry(const Pose& T_a_b) const {
-    const double d = T_a_b.translation().norm();
-    return Diagonal(o.rot_sigma0 + o.rot_sigma_per_m * d, o.trans_sigma0 + o.trans_sigma_per_m * d);
-  }
-  Matrix6d Loop(const Matrix6d& cov) const {
-    Matrix6d floored = 0.5 * (cov + cov.transpose());
-    for (int i = 0; i < 6; ++i) {
-      const double floor = i < 3 ? o.loop_min_sigma_rot : o.loop_min_sigma_trans;
-      floored(i, i) += floor * floor;
-    }
-    return floored.inverse();
-  }
-  static Matrix6d Diagonal(double sigma_rot, double sigma_trans) {
-    Vector6d d;
-    d << Eigen::Vector3d::Constant(1 / (sigma_rot * sigma_rot)),
-        Eigen::Vector3d::Constant(1 / (sigma_trans * sigma_trans));
-    return d.asDiagonal();
-  }
-};
 
 StereoIntrinsics IntrinsicsOf(const StereoRig& rig) {
   StereoIntrinsics K;
@@ -112,7 +93,9 @@ std::vector<BaObservation> SlidingWindowEstimator::WindowObservations(
     const FrameMeasurement& m) const {
   std::vector<BaObservation> out;
   for (const FeatureObservation& o : m.observations) {
-    if (ba_.LandmarkPosition(o.landmark)) out.push_back(ToBa(o));
+    if (!unconfirmed_loop_landmarks_.count(o.landmark) && ba_.LandmarkPosition(o.landmark)) {
+      out.push_back(ToBa(o));
+    }
   }
   return out;
 }
@@ -133,6 +116,7 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
   };
   const bool stereo = rig_.is_stereo();
   for (const FeatureObservation& o : m.observations) {
+    if (unconfirmed_loop_landmarks_.count(o.landmark)) continue;
     if (landmark_observations_.count(o.landmark)) {
       out.push_back(ToBa(o));
       ++cell_count[cell_of(o.uv)];
@@ -168,61 +152,6 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
   return out;
 }
 
-bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur_id,
-                                       Pose* T_w_c) {
-  const auto old = keyframe_of_frame_.find(loop.old_frame);
-  if (old == keyframe_of_frame_.end()) {
-    LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
-    return false;
-  }
-  // Nodes: every keyframe at its current estimate, and the new one.
-  std::map<KeyframeId, Pose> T_w_kf;
-  for (const auto& [id, pose] : keyframe_poses_) T_w_kf[id] = KeyframePoseNow(id);
-  T_w_kf[cur_id] = *T_w_c;
-  const LoopClosureInformation info = {options_.loop};
-  std::vector<PoseGraphEdge> edges;
-  for (auto it = T_w_kf.begin(); std::next(it) != T_w_kf.end(); ++it) {
-    const auto next = std::next(it);
-    PoseGraphEdge e;
-    e.from = it->first;
-    e.to = next->first;
-    e.T_from_to = it->second.inverse() * next->second;
-    e.information = info.Odometry(e.T_from_to);
-    edges.push_back(e);
-  }
-  PoseGraphEdge loop_edge;
-  loop_edge.from = old->second;
-  loop_edge.to = cur_id;
-  loop_edge.T_from_to = loop.T_old_cur;
-  loop_edge.information = info.Loop(loop.cov);
-  loop_edge.is_loop = true;
-  edges.insert(edges.end(), loop_edges_.begin(), loop_edges_.end());
-  edges.push_back(loop_edge);
-  PoseGraphSummary summary;
-  const std::map<KeyframeId, Pose> corrected =
-      OptimizePoseGraph(T_w_kf, edges, options_.loop.pose_graph, &summary);
-  if (!summary.usable) {
-    LOG(WARNING) << "loop pose graph failed: loop to frame " << loop.old_frame << " ignored";
-    return false;
-  }
-  loop_edges_.push_back(loop_edge);
-  VLOG(1) << "loop closed: keyframe " << loop_edge.from << " (frame " << loop.old_frame
-          << ") -> new keyframe " << cur_id << ", " << loop.inliers << " inliers, pose graph cost "
-          << summary.initial_cost << " -> " << summary.final_cost << ", current moved by "
-          << (corrected.at(cur_id).translation() - T_w_c->translation()).norm() << " m";
-  // Landmarks move with their anchor keyframe: p_w_new = T_w_a_new T_w_a_old^-1 p_w_old.
-  for (const auto& [id, a] : anchor_) {
-    const Pose delta = corrected.at(a) * T_w_kf.at(a).inverse();
-    if (const auto p_w = ba_.LandmarkPosition(id)) ba_.SetLandmarkPosition(id, delta * *p_w);
-    const auto it = map_points_.find(id);
-    if (it != map_points_.end()) it->second = delta * it->second;
-  }
-  for (auto& [id, pose] : keyframe_poses_) pose = corrected.at(id);
-  ba_.ApplyCorrection(corrected);
-  *T_w_c = corrected.at(cur_id);
-  return true;
-}
-
 Pose SlidingWindowEstimator::KeyframePoseNow(KeyframeId id) const {
   if (const auto pose = ba_.KeyframePose(id)) return *pose;
   const auto it = keyframe_poses_.find(id);
@@ -244,6 +173,7 @@ std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& 
   std::vector<cv::Point2d> image;
   std::vector<BaObservation> observations;
   for (const FeatureObservation& o : m.observations) {
+    if (unconfirmed_loop_landmarks_.count(o.landmark)) continue;
     const std::optional<Eigen::Vector3d> p_w = ba_.LandmarkPosition(o.landmark);
     if (!p_w) continue;
     object.emplace_back(p_w->x(), p_w->y(), p_w->z());
@@ -399,7 +329,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   out.valid = stereo && (first || m.motion.has_value());
 
   if (!first) {
-    if (m.is_keyframe && m.loop && options_.loop.enable) {
+    if (stereo && m.is_keyframe && m.loop && options_.loop.enable) {
       out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
     }
     // Pose-only tracking against the window (a keyframe: before it joins the window).
@@ -417,6 +347,15 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     if (const std::optional<Pose> recovered = RecoverPose(m)) {
       T_w_c = *recovered;
       out.valid = true;
+    }
+  }
+  // One camera: the loop closes from the tracked pose (the similarity moves it).
+  if (!stereo && out.valid && m.is_keyframe && m.loop && options_.loop.enable) {
+    out.loop_closed = CloseMonoLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
+    // The frontend gave the recognised points their old ids; unconfirmed in 3D, the old
+    // landmarks' estimates would be outliers of the drifted neighbourhood: never used.
+    if (!out.loop_closed) {
+      for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.insert(ids.second);
     }
   }
   // A mono keyframe needs a tracked pose (see the class comment).

@@ -63,12 +63,15 @@
 
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "backend/ba/pose_graph.h"
+#include "backend/ba/sim3_pose_graph.h"
 #include "backend/ba/sliding_window_ba.h"
 #include "backend/estimator.h"
+#include "backend/mono/loop_sim3.h"
 #include "backend/mono/mono_initializer.h"
 #include "core/camera.h"
 #include "frontend/worker_thread.h"
@@ -101,6 +104,12 @@ struct BaLoopClosureOptions {
   // Floor on the loop edge's standard deviations (rad, m).
   double loop_min_sigma_rot = 2e-3;
   double loop_min_sigma_trans = 0.02;
+  // One camera (Sim(3) graph): standard deviation of the log scale of a consecutive edge (the
+  // scale drift per keyframe) and of a loop edge; the loop's similarity from the recognised
+  // landmarks (backend/mono/loop_sim3.h).
+  double mono_scale_sigma = 0.01;
+  double mono_loop_scale_sigma = 0.01;
+  LoopSim3Options sim3;
 
   bool IsValid(std::string* why) const;
 };
@@ -140,7 +149,9 @@ class SlidingWindowEstimator : public Estimator {
     return ba_;
   }
   int num_keyframes() const { return num_keyframes_; }
-  int num_loops_closed() const { return static_cast<int>(loop_edges_.size()); }
+  int num_loops_closed() const {
+    return static_cast<int>(loop_edges_.size() + mono_loop_edges_.size());
+  }
 
  private:
   struct FrameRecord {
@@ -172,6 +183,10 @@ class SlidingWindowEstimator : public Estimator {
   // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame
   // is not a keyframe or the solve fails.
   bool CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
+  // One camera: the same over Sim(3) (backend/ba/sim3_pose_graph.h), the loop edge from the
+  // similarity of the recognised landmarks' two estimates; *T_w_c is the keyframe's tracked
+  // pose. Frames between keyframes and the velocity are rescaled with their keyframe.
+  bool CloseMonoLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
   // Optimises the window with the new keyframe `id` and records the new estimates
   // (keyframe_poses_, map_points_). Runs on solver_ when options_.background_solve.
   void SolveWindow(KeyframeId id);
@@ -188,6 +203,9 @@ class SlidingWindowEstimator : public Estimator {
   std::map<LandmarkId, KeyframeId> anchor_;            // The keyframe that added the landmark.
   std::map<FrameId, KeyframeId> keyframe_of_frame_;
   std::vector<PoseGraphEdge> loop_edges_;              // Every loop closed so far.
+  std::vector<Sim3Edge> mono_loop_edges_;  // One camera: every loop, in the current units.
+  // One camera: old landmarks a loop that was not closed relabelled (see Add).
+  std::set<LandmarkId> unconfirmed_loop_landmarks_;
   Pose T_w_prev_ = Pose::Identity();
   Pose velocity_ = Pose::Identity();  // T_prev_cur of the last frame.
   // Mono: the initializer until the map exists, and every observation of the last keyframe

@@ -113,6 +113,11 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("loop", "ba_trans_sigma_per_m", &bl.trans_sigma_per_m);
   v->Field("loop", "ba_loop_min_sigma_rot", &bl.loop_min_sigma_rot);
   v->Field("loop", "ba_loop_min_sigma_trans", &bl.loop_min_sigma_trans);
+  v->Field("loop", "ba_mono_scale_sigma", &bl.mono_scale_sigma);
+  v->Field("loop", "ba_mono_loop_scale_sigma", &bl.mono_loop_scale_sigma);
+  v->Field("loop", "mono_sim3_relative_tolerance", &bl.sim3.relative_tolerance);
+  v->Field("loop", "mono_sim3_min_inliers", &bl.sim3.min_inliers);
+  v->Field("loop", "mono_gate_fraction", &l.mono_gate_fraction);
   SlidingWindowEstimatorOptions& b = o->ba;
   v->Field("ba", "window_size", &b.ba.window_size);
   v->Field("ba", "use_marginalization", &b.ba.use_marginalization);

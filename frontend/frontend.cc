@@ -267,10 +267,27 @@ void Frontend::RelocalizeFromKeyframe(TrackedFrame* cur) const {
           << " mapped landmarks of keyframe " << kf.id << " found again";
 }
 
-std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame, TrackedFrame* cur) {
-  KeyframeEntry entry =
-      place_recognition_.MakeEntry(frame.id, frame.t_ns, cur->T_w_c, path_length_m_, frame.left,
-                                   cur->detection, cur->stereo, cur->landmark);
+std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
+                                                  const std::optional<MotionEstimate>& motion,
+                                                  TrackedFrame* cur) {
+  // Stereo: the keyframe's stereo points and the dead-reckoned pose (metres). One camera: its
+  // mapped landmarks, at the estimator's predicted pose (map units).
+  Pose T_w_c = cur->T_w_c;
+  double path_length = path_length_m_;
+  const std::vector<std::optional<StereoPoint>>* points = &cur->stereo;
+  std::optional<LocalMapSearch::MappedPoints> mapped;
+  if (!rig_.is_stereo()) {
+    std::optional<Pose> T_prev_cur;
+    if (motion) T_prev_cur = motion->T_prev_cur;
+    mapped = local_map_search_.MappedPointsInCamera(prev_->id, T_prev_cur, cur->landmark);
+    if (!mapped) return std::nullopt;
+    T_w_c = mapped->T_w_c;
+    path_length = mapped->path_length;
+    points = &mapped->points;
+  }
+  KeyframeEntry entry = place_recognition_.MakeEntry(frame.id, frame.t_ns, T_w_c, path_length,
+                                                     frame.left, cur->detection, *points,
+                                                     cur->landmark);
   std::optional<PlaceMatch> match =
       place_recognition_.Detect(entry, cur->detection, cur->stereo, cur->landmark);
   if (match) {
@@ -284,6 +301,13 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame, TrackedFra
       if (it != old_of.end()) id = it->second;
     }
   }
+  const PlaceRecognitionStats& stats = place_recognition_.last_stats();
+  VLOG(stats.candidates > 0 ? 1 : 2)
+      << "frame " << frame.id << ": place recognition over " << stats.searched << " keyframes ("
+      << stats.gated_out << " out of the gate), " << stats.candidates << " verified, best "
+      << stats.best_score << " (frame " << stats.best_frame << ")"
+      << (stats.rejected_by_gate ? ", a PnP pose outside the gate" : "")
+      << (match ? ", loop to frame " + std::to_string(match->loop.old_frame.value) : "");
   place_recognition_.Add(std::move(entry));
   if (!match) return std::nullopt;
   return match->loop;
@@ -424,9 +448,10 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   }
 
   // 5. Loop detection at keyframes (relabels the recognised points before they are output).
-  if (out.is_keyframe && stereo && options_.loop.enable) {
+  if (out.is_keyframe && options_.loop.enable &&
+      (stereo || (prev_ && local_map_search_.has_map()))) {
     t0 = Clock::now();
-    out.loop = DetectLoop(frame, &cur);
+    out.loop = DetectLoop(frame, motion, &cur);
     out.timings.loop_ms = MsSince(t0);
   }
 

@@ -137,7 +137,9 @@ class Frontend {
   // without a prior (frontend/local_map_search.h).
   void RelocalizeFromKeyframe(TrackedFrame* cur) const;
   // At a keyframe: searches the database, relabels the recognised points, adds the keyframe.
-  std::optional<LoopDetection> DetectLoop(const Frame& frame, TrackedFrame* cur);
+  std::optional<LoopDetection> DetectLoop(const Frame& frame,
+                                          const std::optional<MotionEstimate>& motion,
+                                          TrackedFrame* cur);
 
   StereoRig rig_;
   FrontendOptions options_;

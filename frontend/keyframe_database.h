@@ -16,6 +16,7 @@
 // Not thread-safe.
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -37,10 +38,11 @@ struct KeyframeEntry {
   // Global appearance descriptor (see place_recognition.h): CV_32F, z-normalised thumbnail.
   cv::Mat global_descriptor;
   // The stereo points: `points.points[k]` and `points.descriptors.row(k)` (no pyramid) go with
-  // landmark[k] and stereo[k].
+  // landmark[k] and stereo[k]. One camera: points with a landmark id, stereo[k] the mapped
+  // landmark's point in this camera (the map's unit) or empty.
   DetectedImage points;
   std::vector<LandmarkId> landmark;
-  std::vector<StereoPoint> stereo;
+  std::vector<std::optional<StereoPoint>> stereo;
 
   size_t size() const { return landmark.size(); }
 };

@@ -31,10 +31,46 @@ void LocalMapSearch::SetLocalMap(LocalMap map) {
   } else {
     velocity_ = Pose::Identity();
   }
+  if (previous_estimate_ && map.tracked) {
+    path_length_ += (map.T_w_c.translation() - previous_estimate_->second.translation()).norm();
+  }
   previous_estimate_ = std::make_pair(map.frame, map.T_w_c);
   map_ = std::move(map);
   point_of_.clear();
   for (const auto& [id, p_w] : map_->points) point_of_.emplace(id, p_w);
+}
+
+Pose LocalMapSearch::PredictPose(const std::optional<Pose>& T_prev_cur, bool metric) const {
+  CHECK(map_.has_value());
+  Pose velocity = velocity_;
+  if (T_prev_cur) {
+    velocity.linear() = T_prev_cur->linear();
+    if (metric) velocity.translation() = T_prev_cur->translation();
+  }
+  return Orthonormalized(map_->T_w_c * velocity);
+}
+
+std::optional<LocalMapSearch::MappedPoints> LocalMapSearch::MappedPointsInCamera(
+    FrameId previous_frame, const std::optional<Pose>& T_prev_cur,
+    const std::vector<LandmarkId>& landmark) const {
+  if (!options_.enable || !map_ || map_->frame != previous_frame || !map_->tracked) {
+    return std::nullopt;
+  }
+  MappedPoints out;
+  out.T_w_c = PredictPose(T_prev_cur, /*metric=*/false);
+  out.path_length = path_length_;
+  out.points.assign(landmark.size(), std::nullopt);
+  const Pose T_c_w = out.T_w_c.inverse();
+  for (size_t i = 0; i < landmark.size(); ++i) {
+    const auto it = point_of_.find(landmark[i]);
+    if (it == point_of_.end()) continue;
+    const Eigen::Vector3d p_c = T_c_w * it->second;
+    if (p_c.z() <= 0) continue;
+    StereoPoint p;
+    p.p_c0 = p_c;
+    out.points[i] = p;
+  }
+  return out;
 }
 
 std::optional<LocalMapSearch::Prediction> LocalMapSearch::PredictFromMap(
@@ -69,12 +105,7 @@ int LocalMapSearch::Search(FrameId previous_frame, const std::optional<Pose>& T_
                            std::vector<LandmarkId>* landmark,
                            std::vector<int>* track_length) const {
   if (!options_.enable || !map_ || map_->frame != previous_frame || map_->points.empty()) return 0;
-  Pose velocity = velocity_;
-  if (T_prev_cur) {
-    velocity.linear() = T_prev_cur->linear();
-    if (metric) velocity.translation() = T_prev_cur->translation();
-  }
-  const Pose T_c_w = Orthonormalized(map_->T_w_c * velocity).inverse();
+  const Pose T_c_w = PredictPose(T_prev_cur, metric).inverse();
   std::unordered_set<LandmarkId> present;
   for (const LandmarkId& id : *landmark) {
     if (id.valid()) present.insert(id);

@@ -36,6 +36,7 @@
 #include "core/types.h"
 #include "frontend/harris.h"
 #include "frontend/matcher.h"
+#include "frontend/stereo.h"
 
 namespace dala {
 
@@ -91,6 +92,21 @@ class LocalMapSearch {
                                            const DetectedImage& previous,
                                            int min_points = 8) const;
 
+  // One camera's stand-in for stereo points in place recognition (frontend/place_recognition.h):
+  // the current frame's points whose landmark (`landmark`, the current detections' ids) the
+  // map holds, in the current camera at the predicted pose (the estimator's previous pose and
+  // velocity, the visual motion's rotation when given; no covariance), with that pose and the
+  // estimator's path length (map units). nullopt without a map of the previous frame or when
+  // the estimator lost it.
+  struct MappedPoints {
+    Pose T_w_c = Pose::Identity();
+    double path_length = 0.0;
+    std::vector<std::optional<StereoPoint>> points;  // One per detection.
+  };
+  std::optional<MappedPoints> MappedPointsInCamera(FrameId previous_frame,
+                                                   const std::optional<Pose>& T_prev_cur,
+                                                   const std::vector<LandmarkId>& landmark) const;
+
   bool has_map() const { return options_.enable && map_.has_value(); }
   // The estimator lost frame `frame` (its map came with tracked = false).
   bool LostAt(FrameId frame) const { return map_ && map_->frame == frame && !map_->tracked; }
@@ -109,6 +125,9 @@ class LocalMapSearch {
     int64_t last_seen = 0;  // Frame id value.
   };
 
+  // The current pose predicted from the map's (see the file comment); needs a map.
+  Pose PredictPose(const std::optional<Pose>& T_prev_cur, bool metric) const;
+
   PinholeCamera camera_;
   LocalMapSearchOptions options_;
   MatcherOptions matcher_;
@@ -116,6 +135,7 @@ class LocalMapSearch {
   std::unordered_map<LandmarkId, Eigen::Vector3d> point_of_;  // map_'s points by id.
   Pose velocity_ = Pose::Identity();  // T_prev_cur of the estimator's last two poses.
   std::optional<std::pair<FrameId, Pose>> previous_estimate_;
+  double path_length_ = 0.0;  // Of the estimator's tracked poses, map units.
   std::map<LandmarkId, Appearance> appearance_;
 };
 

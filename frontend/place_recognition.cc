@@ -41,6 +41,9 @@ bool PlaceRecognitionOptions::IsValid(std::string* why) const {
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0))
     return fail("loop.min_inlier_ratio must be in [0, 1]");
   if (keyframes_between_loops < 0) return fail("loop.keyframes_between_loops must be >= 0");
+  if (!(mono_gate_fraction > 0.0)) return fail("loop.mono_gate_fraction must be > 0");
+  if (mono_max_entry_points < min_inliers)
+    return fail("loop.mono_max_entry_points must be >= loop.min_inliers");
   return true;
 }
 
@@ -113,9 +116,19 @@ KeyframeEntry PlaceRecognition::MakeEntry(FrameId frame, int64_t t_ns, const Pos
   e.points.image_size = detection.image_size;
   e.points.patch_size = detection.patch_size;
   e.points.patch_spacing = detection.patch_spacing;
+  // Stereo: the points with a stereo depth. One camera: the points with a landmark id, those
+  // with a 3D point (mapped) first, then the strongest corners, at most mono_max_entry_points.
   std::vector<int> rows;
   for (size_t i = 0; i < stereo.size(); ++i) {
-    if (stereo[i] && landmark[i].valid()) rows.push_back(static_cast<int>(i));
+    if ((stereo[i] || !rig_.is_stereo()) && landmark[i].valid()) rows.push_back(static_cast<int>(i));
+  }
+  if (!rig_.is_stereo() && static_cast<int>(rows.size()) > options_.mono_max_entry_points) {
+    std::stable_sort(rows.begin(), rows.end(), [&](int a, int b) {
+      if (stereo[a].has_value() != stereo[b].has_value()) return stereo[a].has_value();
+      return detection.points[a].cornerness > detection.points[b].cornerness;
+    });
+    rows.resize(options_.mono_max_entry_points);
+    std::sort(rows.begin(), rows.end());
   }
   e.points.descriptors.create(static_cast<int>(rows.size()), detection.descriptors.cols, CV_32F);
   for (size_t k = 0; k < rows.size(); ++k) {
@@ -123,7 +136,7 @@ KeyframeEntry PlaceRecognition::MakeEntry(FrameId frame, int64_t t_ns, const Pos
     e.points.points.push_back(detection.points[i]);
     detection.descriptors.row(i).copyTo(e.points.descriptors.row(static_cast<int>(k)));
     e.landmark.push_back(landmark[i]);
-    e.stereo.push_back(*stereo[i]);
+    e.stereo.push_back(stereo[i]);
   }
   return e;
 }
@@ -131,8 +144,10 @@ KeyframeEntry PlaceRecognition::MakeEntry(FrameId frame, int64_t t_ns, const Pos
 bool PlaceRecognition::WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
                                   const Eigen::Vector3d& t_w_cur) const {
   if (!options_.spatial_gate) return true;
-  const double radius = options_.gate_radius_m +
-                        options_.gate_fraction * std::abs(query.path_length_m - old.path_length_m);
+  const double path = std::abs(query.path_length_m - old.path_length_m);
+  // One camera: positions and paths in the map's arbitrary unit, whose scale drifts.
+  const double radius = rig_.is_stereo() ? options_.gate_radius_m + options_.gate_fraction * path
+                                         : options_.mono_gate_fraction * path;
   return (t_w_cur - query.T_w_c.translation()).norm() <= radius;
 }
 
@@ -144,12 +159,13 @@ std::optional<PlaceMatch> PlaceRecognition::Verify(
   if (static_cast<int>(old.size()) < options_.min_inliers) return std::nullopt;
   const std::vector<Match> matches = MatchPoints(old.points, detection, options_.matcher);
   if (static_cast<int>(matches.size()) < options_.min_inliers) return std::nullopt;
+  if (!rig_.is_stereo()) return VerifyMono(old, detection, landmark, matches);
   std::vector<MotionCorrespondence> corrs;
   corrs.reserve(matches.size());
   for (const Match& m : matches) {
     MotionCorrespondence c;
-    c.p_prev = old.stereo[m.i].p_c0;
-    c.cov_p_prev = old.stereo[m.i].cov_p_c0;
+    c.p_prev = old.stereo[m.i]->p_c0;
+    c.cov_p_prev = old.stereo[m.i]->cov_p_c0;
     c.uv_cur = detection.points[m.j].uv;
     if (stereo[m.j]) c.u_right_cur = stereo[m.j]->u_right;
     corrs.push_back(c);
@@ -166,17 +182,48 @@ std::optional<PlaceMatch> PlaceRecognition::Verify(
     if (rejected_by_gate) *rejected_by_gate = true;
     return std::nullopt;
   }
+  return MakeMatch(old, landmark, matches, pnp->estimate, pnp->inlier);
+}
+
+std::optional<PlaceMatch> PlaceRecognition::VerifyMono(const KeyframeEntry& old,
+                                                       const DetectedImage& detection,
+                                                       const std::vector<LandmarkId>& landmark,
+                                                       const std::vector<Match>& matches) const {
+  std::vector<Eigen::Vector2d> uv_old, uv_cur;
+  for (const Match& m : matches) {
+    uv_old.push_back(old.points.points[m.i].uv);
+    uv_cur.push_back(detection.points[m.j].uv);
+  }
+  // A revisit from nearly the same viewpoint leaves the epipolar geometry degenerate: the
+  // rotation's homography then verifies the matches instead; the model with more inliers wins.
+  std::optional<MotionResult> best = pnp_.EstimateEssential(uv_old, uv_cur);
+  const std::optional<MotionResult> rotation = pnp_.EstimateRotation(uv_old, uv_cur);
+  if (rotation && (!best || rotation->estimate.inliers > best->estimate.inliers)) best = rotation;
+  if (!best) return std::nullopt;
+  const int inliers = best->estimate.inliers;
+  if (inliers < options_.min_inliers ||
+      inliers < options_.min_inlier_ratio * static_cast<double>(matches.size())) {
+    return std::nullopt;
+  }
+  return MakeMatch(old, landmark, matches, best->estimate, best->inlier);
+}
+
+PlaceMatch PlaceRecognition::MakeMatch(const KeyframeEntry& old,
+                                       const std::vector<LandmarkId>& landmark,
+                                       const std::vector<Match>& matches,
+                                       const MotionEstimate& estimate,
+                                       const std::vector<bool>& inlier) const {
   PlaceMatch out;
   out.loop.old_frame = old.frame;
-  out.loop.T_old_cur = pnp->estimate.T_prev_cur;
-  out.loop.cov = pnp->estimate.cov;
-  out.loop.inliers = inliers;
+  out.loop.T_old_cur = estimate.T_prev_cur;
+  out.loop.cov = estimate.cov;
+  out.loop.inliers = estimate.inliers;
   out.loop.correspondences = static_cast<int>(matches.size());
   // Relabel: an inlier's current point takes the old landmark id, unless that id is already
   // carried by another current point (a track that survived the gap) or it is the same id.
   std::unordered_set<LandmarkId> present(landmark.begin(), landmark.end());
   for (size_t c = 0; c < matches.size(); ++c) {
-    if (!pnp->inlier[c]) continue;
+    if (!inlier[c]) continue;
     const LandmarkId old_id = old.landmark[matches[c].i];
     const LandmarkId cur_id = landmark[matches[c].j];
     if (old_id == cur_id || present.count(old_id)) continue;

@@ -24,9 +24,14 @@
 // 2. Verification of the top_k candidates (best first, score >= min_appearance_score): the
 //    robust matcher without prior (any rotation, scale), old keyframe's stereo points -> current
 //    points, then a seeded RANSAC PnP (frontend/motion_estimator.h) on the old keyframe's stereo
-//    points in its camera against the current (u, v[, d]). Accepted with >= min_inliers inliers,
-//    inliers / matches >= min_inlier_ratio, and the PnP's implied current pose
-//    T_w_old * T_old_cur within the spatial gate of the dead-reckoned one.
+//    points in its camera against the current (u, v[, d]). One camera: the keyframe keeps its
+//    points with a landmark id (no depth), the matches are verified by the essential matrix or,
+//    when the viewpoints nearly coincide (degenerate epipolar geometry), by a rotation's
+//    homography, whichever keeps more; the estimator then checks them in 3D (the similarity
+//    of the recognised landmarks' two estimates, backend/mono/loop_sim3.h), and there is no
+//    PnP pose to gate. Accepted with >= min_inliers inliers, inliers / matches >=
+//    min_inlier_ratio, and (stereo) the PnP's implied current pose T_w_old * T_old_cur within
+//    the spatial gate of the dead-reckoned one.
 //
 // Deterministic (seeded RANSAC, ordered scans, ties broken by frame id).
 //
@@ -57,7 +62,7 @@
 namespace dala {
 
 struct PlaceRecognitionOptions {
-  bool enable = true;  // Loop detection at keyframes (stereo only).
+  bool enable = true;  // Loop detection at keyframes.
   // Global descriptor: thumbnail size (pixels) and the shifts searched when comparing.
   int thumbnail_width = 16;
   int thumbnail_height = 10;
@@ -82,6 +87,11 @@ struct PlaceRecognitionOptions {
   // After an accepted loop, this many keyframes are not searched (one loop edge per revisit
   // is enough for the pose graph; more cost time and add nothing but redundancy).
   int keyframes_between_loops = 5;
+  // One camera: the gate's radius is this fraction of the path between the two keyframes (map
+  // units, no radius in metres: the unit is arbitrary), and an entry keeps at most this many
+  // points (its mapped landmarks first, then the strongest corners: ~0.24 MB per keyframe).
+  double mono_gate_fraction = 0.05;
+  int mono_max_entry_points = 500;
 
   static MotionEstimatorOptions DefaultPnpOptions();
   bool IsValid(std::string* why) const;
@@ -144,6 +154,14 @@ class PlaceRecognition {
   const PlaceRecognitionOptions& options() const { return options_; }
 
  private:
+  // One camera: the 2D verification of `matches` (see the file comment).
+  std::optional<PlaceMatch> VerifyMono(const KeyframeEntry& old, const DetectedImage& detection,
+                                       const std::vector<LandmarkId>& landmark,
+                                       const std::vector<Match>& matches) const;
+  // The match of `old` from the verified `matches` (inlier mask), relabelling the inliers.
+  PlaceMatch MakeMatch(const KeyframeEntry& old, const std::vector<LandmarkId>& landmark,
+                       const std::vector<Match>& matches, const MotionEstimate& estimate,
+                       const std::vector<bool>& inlier) const;
   // |t_w - query.T_w_c.translation()| within the gate radius of (old, query).
   bool WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
                   const Eigen::Vector3d& t_w) const;

@@ -127,6 +127,50 @@ TEST(PlaceRecognition, FindsTheRevisitAndItsPose) {
   EXPECT_EQ(pr.last_stats().searched, 0);
 }
 
+// One camera: the keyframes keep their points without depth, and the revisit is verified by
+// the epipolar geometry (or a rotation's homography); the gate is a fraction of the path in map
+// units. The relabelled points must be keyframe 0's, and the model's rotation the true one.
+TEST(PlaceRecognition, OneCameraFindsTheRevisitByItsEpipolarGeometry) {
+  sim::SimOptions o;
+  o.preset = "small_loop";
+  const sim::SyntheticSequence seq(o);
+  StereoRig mono = seq.rig();
+  mono.baseline = 0;
+  PlaceRecognitionOptions options;
+  options.min_frame_gap = 50;
+  PlaceRecognition pr(mono, options);
+  const auto mono_view = [&](size_t i, int64_t first_landmark) {
+    View v = MakeView(seq, i, first_landmark);
+    v.stereo.assign(v.stereo.size(), std::nullopt);
+    return v;
+  };
+  for (size_t i = 0; i + 60 < seq.size(); i += 40) {
+    const View v = mono_view(i, 100000 * static_cast<int64_t>(i));
+    const KeyframeEntry e = Entry(pr, v, v.T_w_c, 2.5 * i / o.fps);
+    EXPECT_EQ(static_cast<int>(e.size()),
+              std::min<int>(options.mono_max_entry_points, v.detection.points.size()));
+    pr.Add(e);
+  }
+  const size_t n = seq.size() - 2;
+  const View cur = mono_view(n, 900000000);
+  Pose T_w_drifted = cur.T_w_c;
+  T_w_drifted.translation() += Eigen::Vector3d(1.5, -1.2, 0.3);
+  const KeyframeEntry query = Entry(pr, cur, T_w_drifted, 2.5 * n / o.fps);
+  const std::optional<PlaceMatch> match = pr.Detect(query, cur.detection, cur.stereo, cur.landmark);
+  ASSERT_TRUE(match.has_value());
+  EXPECT_EQ(match->loop.old_frame, FrameId(0));
+  const Pose T_old_cur_gt = seq.T_w_c0(0).inverse() * seq.T_w_c0(n);
+  const double rotation_error_deg = RotationDeg(
+      MakePose(T_old_cur_gt.linear().transpose() * match->loop.T_old_cur.linear(),
+               Eigen::Vector3d::Zero()));
+  std::cout << "[ measured ] mono loop: " << match->loop.inliers << " inliers of "
+            << match->loop.correspondences << ", rotation error " << rotation_error_deg << " deg"
+            << std::endl;
+  EXPECT_LT(rotation_error_deg, 0.5);
+  EXPECT_GE(static_cast<int>(match->loop.relabelled.size()), options.min_inliers);
+  for (const auto& [cur_id, old_id] : match->loop.relabelled) EXPECT_LT(old_id.value, 100000);
+}
+
 TEST(PlaceRecognition, NoLoopHalfWayRound) {
   sim::SimOptions o;
   o.preset = "small_loop";

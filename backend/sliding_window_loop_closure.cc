@@ -1,0 +1,191 @@
+// SlidingWindowEstimator's loop closure (see the class comment in sliding_window_estimator.h):
+// an SE(3) pose graph when the scale is observed (stereo), a Sim(3) one with one camera.
+#include <glog/logging.h>
+
+#include "backend/mono/loop_sim3.h"
+#include "backend/sliding_window_estimator.h"
+
+namespace dala {
+namespace {
+
+// Information matrices of the pose-graph edges ([rotation; translation], core/geometry.h; the
+// Sim(3) ones add the log scale).
+struct LoopClosureInformation {
+  BaLoopClosureOptions o;
+  Matrix6d Odometry(const Pose& T_a_b) const {
+    const double d = T_a_b.translation().norm();
+    return Diagonal(o.rot_sigma0 + o.rot_sigma_per_m * d, o.trans_sigma0 + o.trans_sigma_per_m * d);
+  }
+  Matrix6d Loop(const Matrix6d& cov) const {
+    Matrix6d floored = 0.5 * (cov + cov.transpose());
+    for (int i = 0; i < 6; ++i) {
+      const double floor = i < 3 ? o.loop_min_sigma_rot : o.loop_min_sigma_trans;
+      floored(i, i) += floor * floor;
+    }
+    return floored.inverse();
+  }
+  static Matrix6d Diagonal(double sigma_rot, double sigma_trans) {
+    Vector6d d;
+    d << Eigen::Vector3d::Constant(1 / (sigma_rot * sigma_rot)),
+        Eigen::Vector3d::Constant(1 / (sigma_trans * sigma_trans));
+    return d.asDiagonal();
+  }
+  static Matrix7d WithScale(const Matrix6d& information, double sigma_log_scale) {
+    Matrix7d out = Matrix7d::Zero();
+    out.topLeftCorner<6, 6>() = information;
+    out(6, 6) = 1.0 / (sigma_log_scale * sigma_log_scale);
+    return out;
+  }
+};
+
+}  // namespace
+
+bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur_id,
+                                       Pose* T_w_c) {
+  const auto old = keyframe_of_frame_.find(loop.old_frame);
+  if (old == keyframe_of_frame_.end()) {
+    LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
+    return false;
+  }
+  // Nodes: every keyframe at its current estimate, and the new one.
+  std::map<KeyframeId, Pose> T_w_kf;
+  for (const auto& [id, pose] : keyframe_poses_) T_w_kf[id] = KeyframePoseNow(id);
+  T_w_kf[cur_id] = *T_w_c;
+  const LoopClosureInformation info = {options_.loop};
+  std::vector<PoseGraphEdge> edges;
+  for (auto it = T_w_kf.begin(); std::next(it) != T_w_kf.end(); ++it) {
+    const auto next = std::next(it);
+    PoseGraphEdge e;
+    e.from = it->first;
+    e.to = next->first;
+    e.T_from_to = it->second.inverse() * next->second;
+    e.information = info.Odometry(e.T_from_to);
+    edges.push_back(e);
+  }
+  PoseGraphEdge loop_edge;
+  loop_edge.from = old->second;
+  loop_edge.to = cur_id;
+  loop_edge.T_from_to = loop.T_old_cur;
+  loop_edge.information = info.Loop(loop.cov);
+  loop_edge.is_loop = true;
+  edges.insert(edges.end(), loop_edges_.begin(), loop_edges_.end());
+  edges.push_back(loop_edge);
+  PoseGraphSummary summary;
+  const std::map<KeyframeId, Pose> corrected =
+      OptimizePoseGraph(T_w_kf, edges, options_.loop.pose_graph, &summary);
+  if (!summary.usable) {
+    LOG(WARNING) << "loop pose graph failed: loop to frame " << loop.old_frame << " ignored";
+    return false;
+  }
+  loop_edges_.push_back(loop_edge);
+  VLOG(1) << "loop closed: keyframe " << loop_edge.from << " (frame " << loop.old_frame
+          << ") -> new keyframe " << cur_id << ", " << loop.inliers << " inliers, pose graph cost "
+          << summary.initial_cost << " -> " << summary.final_cost << ", current moved by "
+          << (corrected.at(cur_id).translation() - T_w_c->translation()).norm() << " m";
+  // Landmarks move with their anchor keyframe: p_w_new = T_w_a_new T_w_a_old^-1 p_w_old.
+  for (const auto& [id, a] : anchor_) {
+    const Pose delta = corrected.at(a) * T_w_kf.at(a).inverse();
+    if (const auto p_w = ba_.LandmarkPosition(id)) ba_.SetLandmarkPosition(id, delta * *p_w);
+    const auto it = map_points_.find(id);
+    if (it != map_points_.end()) it->second = delta * it->second;
+  }
+  for (auto& [id, pose] : keyframe_poses_) pose = corrected.at(id);
+  ba_.ApplyCorrection(corrected);
+  *T_w_c = corrected.at(cur_id);
+  return true;
+}
+
+bool SlidingWindowEstimator::CloseMonoLoop(const LoopDetection& loop, KeyframeId cur_id,
+                                           Pose* T_w_c) {
+  const auto old = keyframe_of_frame_.find(loop.old_frame);
+  if (old == keyframe_of_frame_.end()) {
+    LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
+    return false;
+  }
+  // The recognised landmarks with an estimate on both sides: where the current neighbourhood
+  // puts them, and where the old one does.
+  std::vector<Eigen::Vector3d> p_cur, p_old;
+  for (const auto& [cur, old_id] : loop.relabelled) {
+    const std::optional<Eigen::Vector3d> a = ba_.LandmarkPosition(cur);
+    const std::optional<Eigen::Vector3d> b = ba_.LandmarkPosition(old_id);
+    if (!a || !b) continue;
+    p_cur.push_back(*a);
+    p_old.push_back(*b);
+  }
+  const std::optional<LoopSim3> sim3 =
+      EstimateLoopSim3(p_cur, p_old, T_w_c->translation(), options_.loop.sim3);
+  if (!sim3) {
+    VLOG(1) << "loop to frame " << loop.old_frame << ": no Sim(3) from " << p_cur.size()
+            << " landmarks mapped on both sides: ignored";
+    return false;
+  }
+  // Nodes at the current estimates, scale 1 (the map's unit everywhere).
+  std::map<KeyframeId, Sim3> S_w_kf;
+  for (const auto& [id, pose] : keyframe_poses_) S_w_kf[id] = Sim3{KeyframePoseNow(id), 1.0};
+  S_w_kf[cur_id] = Sim3{*T_w_c, 1.0};
+  const LoopClosureInformation info = {options_.loop};
+  std::vector<Sim3Edge> edges;
+  for (auto it = S_w_kf.begin(); std::next(it) != S_w_kf.end(); ++it) {
+    const auto next = std::next(it);
+    Sim3Edge e;
+    e.from = it->first;
+    e.to = next->first;
+    e.S_from_to = it->second.Inverse() * next->second;
+    e.information =
+        info.WithScale(info.Odometry(e.S_from_to.T), options_.loop.mono_scale_sigma);
+    edges.push_back(e);
+  }
+  // The loop: the current keyframe moved into the old neighbourhood by the similarity.
+  Sim3Edge loop_edge;
+  loop_edge.from = old->second;
+  loop_edge.to = cur_id;
+  loop_edge.S_from_to = S_w_kf.at(old->second).Inverse() * (sim3->S_old_cur * S_w_kf.at(cur_id));
+  loop_edge.information = info.WithScale(info.Loop(loop.cov), options_.loop.mono_loop_scale_sigma);
+  loop_edge.is_loop = true;
+  edges.insert(edges.end(), mono_loop_edges_.begin(), mono_loop_edges_.end());
+  edges.push_back(loop_edge);
+  PoseGraphSummary summary;
+  const std::map<KeyframeId, Sim3> corrected =
+      OptimizeSim3PoseGraph(S_w_kf, edges, options_.loop.pose_graph, &summary);
+  if (!summary.usable) {
+    LOG(WARNING) << "loop Sim(3) pose graph failed: loop to frame " << loop.old_frame
+                 << " ignored";
+    return false;
+  }
+  VLOG(1) << "mono loop closed: keyframe " << loop_edge.from << " (frame " << loop.old_frame
+          << ") -> new keyframe " << cur_id << ", " << sim3->inliers << " of " << p_cur.size()
+          << " landmarks agree, scale " << sim3->S_old_cur.scale << ", pose graph cost "
+          << summary.initial_cost << " -> " << summary.final_cost;
+  // Every keyframe k's unit becomes the world's again: its camera coordinates grow by s_k
+  // (p_k' = s_k p_k), so a stored loop edge a -> b is re-expressed as
+  //   S_a_b' = (R, s_a t, s s_a / s_b).
+  mono_loop_edges_.push_back(loop_edge);
+  for (Sim3Edge& e : mono_loop_edges_) {
+    const double s_a = corrected.at(e.from).scale, s_b = corrected.at(e.to).scale;
+    e.S_from_to.T.translation() *= s_a;
+    e.S_from_to.scale *= s_a / s_b;
+  }
+  // Landmarks move with their anchor keyframe: p_w' = S_w_a' S_w_a^-1 p_w.
+  for (const auto& [id, a] : anchor_) {
+    const Sim3 delta = corrected.at(a) * S_w_kf.at(a).Inverse();
+    if (const auto p_w = ba_.LandmarkPosition(id)) ba_.SetLandmarkPosition(id, delta * *p_w);
+    const auto it = map_points_.find(id);
+    if (it != map_points_.end()) it->second = delta * it->second;
+  }
+  // Frames between keyframes are stored in their keyframe's unit: scaled with it.
+  for (FrameRecord& f : frames_) {
+    if (f.has_pose) f.T_kf_c.translation() *= corrected.at(f.reference).scale;
+  }
+  std::map<KeyframeId, Pose> T_w_kf;
+  for (const auto& [id, S] : corrected) T_w_kf[id] = S.T;
+  for (auto& [id, pose] : keyframe_poses_) pose = T_w_kf.at(id);
+  ba_.ApplyCorrection(T_w_kf);
+  velocity_.translation() *= corrected.at(cur_id).scale;
+  if (!frames_.empty() && frames_.back().has_pose) {
+    T_w_prev_ = KeyframePoseNow(frames_.back().reference) * frames_.back().T_kf_c;
+  }
+  *T_w_c = T_w_kf.at(cur_id);
+  return true;
+}
+
+}  // namespace dala
