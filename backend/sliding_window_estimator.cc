@@ -60,13 +60,14 @@ bool SlidingWindowEstimatorOptions::IsValidFor(const StereoRig& rig, std::string
 
 namespace {
 
-StereoIntrinsics IntrinsicsOf(const StereoRig& rig) {
+StereoIntrinsics IntrinsicsOf(const StereoRig& rig, double disparity_offset_px = 0.0) {
   StereoIntrinsics K;
   K.fx = rig.left.fx;
   K.fy = rig.left.fy;
   K.cx = rig.left.cx;
   K.cy = rig.left.cy;
   K.baseline = rig.baseline;
+  K.disparity_offset_px = disparity_offset_px;
   return K;
 }
 
@@ -140,7 +141,11 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
     ++added;
     out.push_back(ToBa(*o));
     if (stereo) {
-      ba_.SetLandmarkPosition(o->landmark, T_w_c * o->p_c0);
+      // The frontend triangulated d = u - u_right; the rig's model has d + offset, so the
+      // depth is d / (d + offset) of the frontend's (x and y scale with it).
+      const double d = o->disparity();
+      const double corrected = d + ba_.disparity_offset_px();
+      ba_.SetLandmarkPosition(o->landmark, T_w_c * ((corrected > 0 ? d / corrected : 1.0) * o->p_c0));
     } else {
       // Mono: the previous keyframe's view of it makes the pair the window triangulates.
       ba_.AddObservation(last_keyframe_, last_keyframe_observations_.at(o->landmark));
@@ -163,6 +168,7 @@ void SlidingWindowEstimator::SolveWindow(KeyframeId id) {
   const SlidingWindowBa::Summary summary = ba_.Optimize();
   VLOG(2) << "keyframe " << id << ": " << summary.BriefReport();
   if (!summary.usable) LOG(WARNING) << "keyframe " << id << ": window solve not usable";
+  VLOG(2) << "keyframe " << id << ": disparity offset " << ba_.disparity_offset_px() << " px";
   for (const auto& [landmark, p_w] : ba_.Landmarks()) map_points_[landmark] = p_w;
   // Every keyframe's latest estimate (window ones move, the others keep their exit value).
   for (const KeyframeId k : ba_.WindowKeyframes()) keyframe_poses_[k] = *ba_.KeyframePose(k);
@@ -199,7 +205,7 @@ std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& 
   const Pose guess = PoseFromRvecTvec(rvec, tvec).inverse();  // OpenCV gives T_c_w.
   // Refined over every known landmark (the window's and older ones), outliers rejected.
   const PoseOnlyResult r = EstimatePoseOnly(
-      IntrinsicsOf(rig_), observations,
+      IntrinsicsOf(rig_, ba_.disparity_offset_px()), observations,
       [&](LandmarkId id) { return ba_.LandmarkPosition(id); }, guess, options_.pose_only);
   VLOG(1) << "frame " << m.frame << ": PnP recovery " << inliers.size() << " inliers of "
           << object.size() << ", pose-only " << PoseOnlyStatusName(r.status) << " ("

@@ -20,7 +20,7 @@ std::optional<Eigen::Vector3d> TriangulateStereo(const StereoIntrinsics& K,
                                                  const BaObservation& obs,
                                                  double min_disparity_px) {
   if (!K.is_stereo() || !obs.u_right) return std::nullopt;
-  const double disparity = obs.uv.x() - *obs.u_right;
+  const double disparity = obs.uv.x() - *obs.u_right + K.disparity_offset_px;
   if (!(disparity >= min_disparity_px) || disparity <= 0.0) return std::nullopt;
   const double z = K.fx * K.baseline / disparity;
   return Eigen::Vector3d((obs.uv.x() - K.cx) * z / K.fx, (obs.uv.y() - K.cy) * z / K.fy, z);

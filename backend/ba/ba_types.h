@@ -27,6 +27,10 @@ struct StereoIntrinsics {
   double cx = 0.0;
   double cy = 0.0;
   double baseline = 0.0;  // metres; 0 => monocular.
+  // Observed disparities are this much smaller than fx b / z (a real rig's rectification
+  // residual, SlidingWindowBa::Options::estimate_disparity_offset): the right image's abscissa
+  // is u_r = u - fx b / z + disparity_offset_px.
+  double disparity_offset_px = 0.0;
 
   bool is_stereo() const { return baseline > 0.0; }
   bool IsValid(std::string* why) const;

@@ -54,7 +54,7 @@ bool ReprojectionCost<kRows>::Evaluate(double const* const* parameters, double* 
   Eigen::Map<Eigen::Matrix<double, kRows, 1>> r(residuals);
   r[0] = K_.fx * p_c.x() * iz + K_.cx;
   r[1] = K_.fy * p_c.y() * iz + K_.cy;
-  if constexpr (kRows == 3) r[2] = r[0] - K_.fx * K_.baseline * iz;
+  if constexpr (kRows == 3) r[2] = r[0] - K_.fx * K_.baseline * iz + K_.disparity_offset_px;
   r = (r - uvr_meas_) * inv_sigma_;
   if (jacobians == nullptr) return true;
 
@@ -89,6 +89,65 @@ ceres::CostFunction* CreateReprojectionCost(const StereoIntrinsics& K, const BaO
                                    obs.sigma_px);
   }
   return new ReprojectionCost<2>(K, obs.uv, obs.sigma_px);
+}
+
+namespace {
+
+class StereoOffsetCost : public ceres::SizedCostFunction<3, 7, 3, 1> {
+ public:
+  StereoOffsetCost(const StereoIntrinsics& K, const Eigen::Vector3d& uvr, double sigma_px)
+      : K_(K), uvr_(uvr), sigma_px_(sigma_px) {}
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    StereoIntrinsics K = K_;
+    K.disparity_offset_px = parameters[2][0];
+    double* pose_and_point[2] = {jacobians ? jacobians[0] : nullptr,
+                                 jacobians ? jacobians[1] : nullptr};
+    if (!ReprojectionCost<3>(K, uvr_, sigma_px_)
+             .Evaluate(parameters, residuals, jacobians ? pose_and_point : nullptr)) {
+      return false;
+    }
+    if (jacobians && jacobians[2]) {
+      jacobians[2][0] = 0.0;
+      jacobians[2][1] = 0.0;
+      jacobians[2][2] = 1.0 / sigma_px_;
+    }
+    return true;
+  }
+
+ private:
+  StereoIntrinsics K_;
+  Eigen::Vector3d uvr_;
+  double sigma_px_;
+};
+
+class OffsetPriorCost : public ceres::SizedCostFunction<1, 1> {
+ public:
+  explicit OffsetPriorCost(double sigma_px) : inv_sigma_(1.0 / sigma_px) {}
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    residuals[0] = parameters[0][0] * inv_sigma_;
+    if (jacobians && jacobians[0]) jacobians[0][0] = inv_sigma_;
+    return true;
+  }
+
+ private:
+  double inv_sigma_;
+};
+
+}  // namespace
+
+ceres::CostFunction* CreateStereoOffsetCost(const StereoIntrinsics& K, const BaObservation& obs) {
+  CHECK_EQ(ResidualDof(K, obs), 3) << "a disparity offset needs a stereo observation";
+  CHECK_GT(obs.sigma_px, 0.0) << "observation of landmark " << obs.landmark << " has sigma <= 0";
+  return new StereoOffsetCost(K, Eigen::Vector3d(obs.uv.x(), obs.uv.y(), *obs.u_right),
+                              obs.sigma_px);
+}
+
+ceres::CostFunction* CreateOffsetPriorCost(double sigma_px) {
+  CHECK_GT(sigma_px, 0.0);
+  return new OffsetPriorCost(sigma_px);
 }
 
 double WhitenedSquaredError(const StereoIntrinsics& K, const BaObservation& obs, const double* x,

@@ -7,7 +7,8 @@
 // Parameters: the pose block x = [q_w_c (x y z w); t_w_c] (backend/ba/pose_block.h) and the
 // landmark p_w (3). The point in the left camera is p_c = R_w_c^T (p_w - t_w_c) = (x, y, z), and
 //   mono:   r = ( fx x/z + cx - u,  fy y/z + cy - v ) / sigma                       (2 residuals)
-//   stereo: r = ( ..mono.., fx (x - b)/z + cx - u_r ) / sigma                       (3 residuals)
+//   stereo: r = ( ..mono.., fx (x - b)/z + cx + delta - u_r ) / sigma               (3 residuals)
+// with delta the rig's disparity offset (StereoIntrinsics::disparity_offset_px, usually 0).
 // (fx (x - b)/z + cx = u - fx b / z: the right camera sits at +b along x of the left camera).
 // Residuals are whitened by the pixel standard deviation sigma, so |r|^2 is chi-square with 2 or
 // 3 degrees of freedom for an inlier.
@@ -54,6 +55,12 @@ class ReprojectionCost : public ceres::SizedCostFunction<kRows, 7, 3> {
 // The stereo cost when obs has u_right (and K is stereo), else the mono cost. The caller owns
 // the result (or hands it to a ceres::Problem).
 ceres::CostFunction* CreateReprojectionCost(const StereoIntrinsics& K, const BaObservation& obs);
+
+// The stereo cost with the rig's disparity offset as a third parameter block (1 value, pixels,
+// replacing K.disparity_offset_px): dr/d(offset) = (0, 0, 1 / sigma). CHECKs a stereo obs.
+ceres::CostFunction* CreateStereoOffsetCost(const StereoIntrinsics& K, const BaObservation& obs);
+// The prior offset / sigma_px on the disparity offset block (1 residual).
+ceres::CostFunction* CreateOffsetPriorCost(double sigma_px);
 
 // Whitened squared residual |r|^2 of obs at (pose block x, p_w) in double precision, and the
 // depth z of the point in the camera. Used by the outlier test: compare to the chi-square

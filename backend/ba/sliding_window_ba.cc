@@ -27,6 +27,8 @@ bool SlidingWindowBa::Options::IsValid(std::string* why) const {
   if (!(function_tolerance > 0.0)) return fail("function_tolerance must be > 0");
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (max_outlier_rounds < 0) return fail("max_outlier_rounds must be >= 0");
+  if (!(disparity_offset_prior_sigma_px > 0.0))
+    return fail("disparity_offset_prior_sigma_px must be > 0");
   if (min_observations < 1) return fail("min_observations must be >= 1");
   if (!(min_disparity_px > 0.0)) return fail("min_disparity_px must be > 0");
   if (!(min_triangulation_parallax_deg > 0.0)) {
@@ -293,14 +295,26 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
       problem.AddParameterBlock(window_[i].x.data(), 7, manifold.get());
       if (IsHeldConstant(i)) problem.SetParameterBlockConstant(window_[i].x.data());
     }
+    // The rig's disparity offset, estimated with the window (see Options).
+    const bool estimate_offset = options_.estimate_disparity_offset && K_.is_stereo();
+    double offset = K_.disparity_offset_px;
     std::set<LandmarkId> active;
     for (KeyframeState& kf : window_) {
       for (const BaObservation& obs : kf.observations) {
         if (!IsActive(obs.landmark, counts)) continue;
         active.insert(obs.landmark);
-        problem.AddResidualBlock(CreateReprojectionCost(K_, obs), loss.get(), kf.x.data(),
-                                 landmarks_.at(obs.landmark).data());
+        double* p_w = landmarks_.at(obs.landmark).data();
+        if (estimate_offset && ResidualDof(K_, obs) == 3) {
+          problem.AddResidualBlock(CreateStereoOffsetCost(K_, obs), loss.get(), kf.x.data(), p_w,
+                                   &offset);
+        } else {
+          problem.AddResidualBlock(CreateReprojectionCost(K_, obs), loss.get(), kf.x.data(), p_w);
+        }
       }
+    }
+    if (estimate_offset && problem.HasParameterBlock(&offset)) {
+      problem.AddResidualBlock(CreateOffsetPriorCost(options_.disparity_offset_prior_sigma_px),
+                               nullptr, &offset);
     }
     if (round == 0) active_before = active;
     if (!prior_.empty()) {
@@ -331,6 +345,7 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
     if (round == 0) summary.initial_cost = ceres_summary.initial_cost;
     summary.final_cost = ceres_summary.final_cost;
     summary.usable = ceres_summary.IsSolutionUsable();
+    if (estimate_offset && summary.usable) K_.disparity_offset_px = offset;
 
     int removed = 0;
     if (options_.remove_outliers && summary.usable) {

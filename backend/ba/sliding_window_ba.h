@@ -97,6 +97,17 @@ class SlidingWindowBa {
     // load on KITTI, 0.1822 vs 0.1826 m ATE). The iteration cap bounds the work instead.
     double max_solver_time_in_seconds = 2.0;
     double function_tolerance = 1e-6;
+    // Stereo: estimate the rig's disparity offset delta (StereoIntrinsics::disparity_offset_px)
+    // with every window solve, one parameter shared by all stereo residuals, with a prior
+    // delta ~ N(0, disparity_offset_prior_sigma_px^2) (a calibrated rig has none; the prior
+    // decides when the window cannot: no motion, no depth variety). Why: a real rig's
+    // rectification leaves disparities a few tenths of a pixel off (KITTI 06: ~0.3 px too
+    // small), which far points turn into a scale error of delta / d; the left-image residuals
+    // across keyframes see depth independently of the stereo pair, so delta (an offset) and
+    // the scale (a factor on d) separate. Tracking, marginalisation and new stereo landmarks
+    // use the last estimate (held constant there).
+    bool estimate_disparity_offset = false;
+    double disparity_offset_prior_sigma_px = 1.0;
     int num_threads = 1;            // > 1 may change the result in the last bits.
     bool remove_outliers = true;    // chi-square 95% test after each solve, then re-solve.
     int max_outlier_rounds = 2;     // re-solves after removing outliers.
@@ -163,6 +174,9 @@ class SlidingWindowBa {
   std::vector<KeyframeId> WindowKeyframes() const;
   std::optional<Pose> KeyframePose(KeyframeId id) const;
   std::optional<Eigen::Vector3d> LandmarkPosition(LandmarkId id) const;
+  // The rig's disparity offset as last estimated (StereoIntrinsics::disparity_offset_px; 0
+  // until a window solve estimated it, or when Options::estimate_disparity_offset is off).
+  double disparity_offset_px() const { return K_.disparity_offset_px; }
   // Landmarks with a position that are currently in the window's map.
   std::map<LandmarkId, Eigen::Vector3d> Landmarks() const;
   const std::vector<MarginalizedKeyframe>& marginalized_keyframes() const { return marginalized_; }
