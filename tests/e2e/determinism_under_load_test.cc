@@ -64,11 +64,11 @@ nlohmann::json WithoutTimings(nlohmann::json report) {
 
 TEST(DeterminismUnderLoad, TwoRunsGiveIdenticalFiles) {
   testing::TempDir dir;
-  // The small loop (125 m) at 4 Hz, small images: ~4 s a run unloaded, and it closes loops, so
+  // The small loop (125 m) at 3 Hz, small images: ~3 s a run unloaded, and it closes loops, so
   // the window BA, the pose-only tracking and the pose graph all solve under load.
   sim::SimOptions sim;
   sim.preset = "small_loop";
-  sim.fps = 4;
+  sim.fps = 3;
   sim.width = 320;
   sim.height = 240;
   sim.fx = sim.fy = 200;
