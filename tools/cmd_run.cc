@@ -176,6 +176,7 @@ int RunRun(const std::vector<std::string>& args) {
   const auto start = std::chrono::steady_clock::now();
   Frame frame;
   size_t done = 0;
+  int skipped_so_far = 0;
   TrackResult last;
   while (!stop.received()) {
     try {
@@ -187,8 +188,17 @@ int RunRun(const std::vector<std::string>& args) {
         throw Error() << e.message() << "; the first frame of the run cannot be skipped: "
                       << "restore it, or start after it with --first_frame " << e.frame().value + 1;
       }
-      progress.Say("[run] warning: frame " + std::to_string(e.frame().value) +
-                   " skipped (reported lost; --strict stops instead): " + e.message() + "\n");
+      // A folder that lacks hundreds of frames (a partial copy) gets a few lines, not hundreds.
+      constexpr int kSkipWarnings = 10;
+      const int skipped = ++skipped_so_far;
+      if (skipped <= kSkipWarnings) {
+        progress.Say("[run] warning: frame " + std::to_string(e.frame().value) +
+                     " skipped (reported lost; --strict stops instead): " + e.message() + "\n");
+      }
+      if (skipped == kSkipWarnings) {
+        progress.Say("[run] warning: further skipped frames are not listed here (report.json "
+                     "marks every one \"skipped\")\n");
+      }
       system.SkipFrame(e.frame(), e.t_ns(), "skipped: " + e.message());
       last.status = TrackingStatus::kLost;
     }

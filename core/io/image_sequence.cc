@@ -110,11 +110,7 @@ void CheckMissingImages(const std::vector<MissingImage>& missing, const FrameRan
                   << "cannot be skipped: --first_frame " << range.begin + 1 << " starts after it)";
   }
   if (!options.allow_missing_images) throw Error() << missing.front().message;
-  size_t frames = 0;
-  for (size_t k = 0; k < missing.size(); ++k) {
-    frames += k == 0 || missing[k].frame != missing[k - 1].frame;
-  }
-  LOG(WARNING) << path << ": frames to run with a missing image: " << frames << " of "
+  LOG(WARNING) << path << ": frames to run with a missing image: " << missing.size() << " of "
                << range.end - range.begin
                << "; they are skipped (reported lost). The first: " << missing.front().message;
 }

@@ -40,7 +40,7 @@ struct FrameRange {
 };
 FrameRange SelectFrames(size_t n, const DatasetOptions& options, const std::string& path);
 
-// An image file the index names for a selected frame, absent from the folder.
+// An image file the index names for a selected frame, absent from the folder (one per frame).
 struct MissingImage {
   size_t frame = 0;
   std::string message;  // Names the file and the fix, as an error would.
