@@ -190,14 +190,12 @@ int RunRun(const std::vector<std::string>& args) {
       }
       // A folder that lacks hundreds of frames (a partial copy) gets a few lines, not hundreds.
       constexpr int kSkipWarnings = 10;
-      const int skipped = ++skipped_so_far;
-      if (skipped <= kSkipWarnings) {
+      if (++skipped_so_far <= kSkipWarnings) {
         progress.Say("[run] warning: frame " + std::to_string(e.frame().value) +
                      " skipped (reported lost; --strict stops instead): " + e.message() + "\n");
-      }
-      if (skipped == kSkipWarnings) {
-        progress.Say("[run] warning: further skipped frames are not listed here (report.json "
-                     "marks every one \"skipped\")\n");
+      } else if (skipped_so_far == kSkipWarnings + 1) {
+        progress.Say("[run] warning: more frames skipped, not listed here (report.json marks "
+                     "every one \"skipped\")\n");
       }
       system.SkipFrame(e.frame(), e.t_ns(), "skipped: " + e.message());
       last.status = TrackingStatus::kLost;
