@@ -112,6 +112,17 @@ TrackResult System::Track(const Frame& frame) {
   return r;
 }
 
+void System::SkipFrame(FrameId frame, int64_t t_ns, const std::string& note) {
+  FrameStats s;
+  s.frame = frame;
+  s.t_ns = t_ns;
+  s.status = TrackingStatus::kLost;
+  s.valid = false;
+  s.skipped = true;
+  s.note = note;
+  stats_.push_back(s);
+}
+
 void System::RecordKeyframe() {
   SavedKeyframe record;
   const DetectedImage* detection = frontend_->keyframe_detection();

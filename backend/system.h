@@ -45,6 +45,7 @@ struct FrameStats {
   int64_t t_ns = 0;
   TrackingStatus status = TrackingStatus::kInitializing;
   bool valid = false;
+  bool skipped = false;  // Its images could not be read (SkipFrame): lost, no pose.
   bool keyframe = false;
   int features = 0;
   int tracked = 0;           // Observations continuing a track.
@@ -68,6 +69,12 @@ class System {
   System(const StereoRig& rig, const SystemOptions& options);
 
   TrackResult Track(const Frame& frame);
+  // Records a frame whose images could not be read (dala run skips such a frame): stats() report
+  // it lost with `note`, and it gets no pose. Neither the frontend nor the estimator sees it: the
+  // next frame is tracked from the intact frame before the gap (the constant-velocity prediction,
+  // then matching without a prior, as after a jerk), and if that fails it is lost and then
+  // relocalised like any lost frame.
+  void SkipFrame(FrameId frame, int64_t t_ns, const std::string& note);
 
   // Every frame tracked so far that has a pose (estimates corrected by later optimisation);
   // a mono run leaves out the frames before its initialisation (stats() says which).

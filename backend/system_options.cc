@@ -147,7 +147,12 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   b.ba.landmark_exit = known->second;
   v->Field("ba", "loss_scale", &b.ba.loss_scale);
   v->Field("ba", "max_num_iterations", &b.ba.max_num_iterations);
+  // The three solvers' wall-clock limits: 0 = none (the default: results do not depend on the
+  // machine's load); a positive value is a non-deterministic opt-in (backend/ba/solver_time.h).
   v->Field("ba", "max_solver_time_in_seconds", &b.ba.max_solver_time_in_seconds);
+  v->Field("ba", "pose_only_max_solver_time_in_seconds", &b.pose_only.max_solver_time_in_seconds);
+  v->Field("ba", "pose_graph_max_solver_time_in_seconds",
+           &b.loop.pose_graph.max_solver_time_in_seconds);
   v->Field("ba", "remove_outliers", &b.ba.remove_outliers);
   v->Field("ba", "min_observations", &b.ba.min_observations);
   v->Field("ba", "max_new_landmarks_per_keyframe", &b.max_new_landmarks_per_keyframe);

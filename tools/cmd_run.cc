@@ -23,6 +23,7 @@
 #include "core/io/ply_writer.h"
 #include "core/io/trajectory_io.h"
 #include "tools/command.h"
+#include "tools/stop_signal.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
 DEFINE_string(config, "", "run: YAML file of options (see --dump_config for every key)");
@@ -34,6 +35,9 @@ DEFINE_int32(first_frame, 0, "run: index of the first frame to process");
 DEFINE_int32(max_frames, 0, "run: process at most this many frames (0: all)");
 DEFINE_bool(dump_config, false, "run: print the effective options as YAML and exit");
 DEFINE_bool(progress, true, "run: show progress on stderr");
+DEFINE_bool(strict, false,
+            "run: stop with an error (exit 2) at a missing, unreadable or wrongly sized image "
+            "instead of skipping its frame");
 
 // --set may be given several times: a validator collects every value.
 static std::vector<std::string>& SetAssignments() {
@@ -79,6 +83,8 @@ class Progress {
   void Done() {
     if (enabled_ && tty_) std::cerr << "\n";
   }
+  // A line of its own, also below a progress bar.
+  void Say(const std::string& message) { std::cerr << (enabled_ && tty_ ? "\n" : "") << message; }
 
  private:
   size_t total_;
@@ -90,6 +96,7 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"t", SecondsFromNs(s.t_ns)},
           {"status", TrackingStatusName(s.status)},
           {"valid", s.valid},
+          {"skipped", s.skipped},
           {"keyframe", s.keyframe},
           {"features", s.features},
           {"tracked", s.tracked},
@@ -108,11 +115,13 @@ nlohmann::json FrameJson(const FrameStats& s) {
             {"total", s.total_ms}}}};
 }
 
-// One stage's percentiles (median, p95, max) over the frames.
+// One stage's percentiles (median, p95, max) over the frames processed (not the skipped ones).
 nlohmann::json StageTable(const std::vector<FrameStats>& stats) {
   const auto column = [&](auto get) {
     std::vector<double> v;
-    for (const FrameStats& s : stats) v.push_back(get(s));
+    for (const FrameStats& s : stats) {
+      if (!s.skipped) v.push_back(get(s));
+    }
     return nlohmann::json{{"median", Percentile(v, 0.5)},
                           {"p95", Percentile(v, 0.95)},
                           {"max", v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())}};
@@ -148,6 +157,7 @@ int RunRun(const std::vector<std::string>& args) {
   dataset_options.calibration_yaml = FLAGS_calibration;
   dataset_options.first_frame = FLAGS_first_frame;
   dataset_options.max_frames = FLAGS_max_frames;
+  dataset_options.allow_missing_images = !FLAGS_strict;
   // Mode "mono" is one camera: the right images are not even read.
   dataset_options.force_mono = options.mode == "mono" && !options.mono_stereo_motion;
   std::string why;
@@ -156,6 +166,9 @@ int RunRun(const std::vector<std::string>& args) {
   CreateDirectories(FLAGS_out);
 
   System system(dataset->rig(), options);
+  // Ctrl-C / SIGTERM from here on: stop after the current frame and write the results so far.
+  // (Installed before the line below, which tells a watching process that the run started.)
+  const StopSignal stop;
   std::cerr << "[run] " << args[0] << " (" << DatasetFormatName(dataset->format()) << ", "
             << dataset->size() << " frames, " << (dataset->is_stereo() ? "stereo" : "mono")
             << ") with " << options.estimator << "/" << options.mode << "\n";
@@ -163,15 +176,41 @@ int RunRun(const std::vector<std::string>& args) {
   const auto start = std::chrono::steady_clock::now();
   Frame frame;
   size_t done = 0;
+  int skipped_so_far = 0;
   TrackResult last;
-  while (dataset->Next(&frame)) {
-    last = system.Track(frame);
+  while (!stop.received()) {
+    try {
+      if (!dataset->Next(&frame)) break;
+      last = system.Track(frame);
+    } catch (const FrameError& e) {
+      if (FLAGS_strict) throw;
+      if (system.stats().empty()) {
+        throw Error() << e.message() << "; the first frame of the run cannot be skipped: "
+                      << "restore it, or start after it with --first_frame " << e.frame().value + 1;
+      }
+      // A folder that lacks hundreds of frames (a partial copy) gets a few lines, not hundreds.
+      constexpr int kSkipWarnings = 10;
+      if (++skipped_so_far <= kSkipWarnings) {
+        progress.Say("[run] warning: frame " + std::to_string(e.frame().value) +
+                     " skipped (reported lost; --strict stops instead): " + e.message() + "\n");
+      } else if (skipped_so_far == kSkipWarnings + 1) {
+        progress.Say("[run] warning: more frames skipped, not listed here (report.json marks "
+                     "every one \"skipped\")\n");
+      }
+      system.SkipFrame(e.frame(), e.t_ns(), "skipped: " + e.message());
+      last.status = TrackingStatus::kLost;
+    }
     ++done;
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     progress.Update(done, done / std::max(elapsed, 1e-9), last.status);
   }
   progress.Done();
+  const int signal = stop.received();
+  if (signal != 0) {
+    std::cerr << "[run] " << StopSignalName(signal) << ": stopped after " << done << " of "
+              << dataset->size() << " frames; writing the results of those frames\n";
+  }
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -191,17 +230,19 @@ int RunRun(const std::vector<std::string>& args) {
 
   const auto& stats = system.stats();
   std::vector<double> total_ms;
-  // Lost: frames the estimator could not estimate (extrapolated); initialising: frames a mono
-  // estimator saw before its map existed. The trajectory leaves out the frames without a pose.
-  int failures = 0, initialising = 0, keyframes = 0, loops = 0, loops_closed = 0;
+  // Lost: frames the estimator could not estimate (extrapolated) and skipped frames (unreadable
+  // images: no pose); initialising: frames a mono estimator saw before its map existed. The
+  // trajectory leaves out the frames without a pose.
+  int failures = 0, skipped = 0, initialising = 0, keyframes = 0, loops = 0, loops_closed = 0;
   std::vector<double> loop_ms;  // Place recognition, per keyframe.
   for (const FrameStats& s : stats) {
-    total_ms.push_back(s.total_ms);
+    if (!s.skipped) total_ms.push_back(s.total_ms);
     loops += s.loop;
     loops_closed += s.loop_closed;
     if (s.keyframe) loop_ms.push_back(s.frontend.loop_ms);
     initialising += s.status == TrackingStatus::kInitializing && !s.valid;
     failures += !s.valid && s.status != TrackingStatus::kInitializing;
+    skipped += s.skipped;
     keyframes += s.keyframe;
   }
   nlohmann::json summary = {
@@ -212,7 +253,10 @@ int RunRun(const std::vector<std::string>& args) {
       {"ms_p95", Percentile(total_ms, 0.95)},
       {"ms_max", total_ms.empty() ? 0.0 : *std::max_element(total_ms.begin(), total_ms.end())},
       {"stages_ms", StageTable(stats)},
-      {"tracking_failures", failures},
+      {"tracking_failures", failures},  // Including the skipped frames.
+      {"frames_skipped", skipped},      // Unreadable images: no pose (note "skipped: ...").
+      // Stopped by SIGINT / SIGTERM before the end: the outputs cover the frames done.
+      {"interrupted", signal != 0},
       {"frames_initialising", initialising},
       {"frames_with_pose", trajectory.size()},
       // "scale" is the evaluation's Sim(3) scale (below): what fixes the map's unit is this.
@@ -257,9 +301,11 @@ int RunRun(const std::vector<std::string>& args) {
       {"summary", summary}};
   WriteFileAtomically(dir + "/report.json", [&](std::ostream& os) { os << report.dump(1) << "\n"; });
 
-  std::cout << "frames      " << stats.size() << " (" << failures << " lost, " << initialising
-            << " initialising, " << trajectory.size() << " with a pose, " << keyframes
-            << " keyframes, " << loops << " loops detected, " << loops_closed << " closed)\n"
+  std::cout << "frames      " << stats.size() << " (" << failures << " lost"
+            << (skipped > 0 ? " of which " + std::to_string(skipped) + " skipped" : "") << ", "
+            << initialising << " initialising, " << trajectory.size() << " with a pose, "
+            << keyframes << " keyframes, " << loops << " loops detected, " << loops_closed
+            << " closed)\n"
             << "scale       " << system.ScaleDescription() << "\n"
             << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
             << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
@@ -272,12 +318,18 @@ int RunRun(const std::vector<std::string>& args) {
   if (!evaluation_error.empty()) std::cout << "evaluation  not done: " << evaluation_error << "\n";
   if (trajectory.size() < stats.size()) {
     std::cout << "note        " << stats.size() - trajectory.size()
-              << " frames have no pose (before the monocular initialisation): trajectory files "
-                 "leave them out; pair trajectory_kitti.txt with ground truth by time "
-                 "(trajectory.txt)\n";
+              << " frames have no pose (skipped, or before the monocular initialisation): "
+                 "trajectory files leave them out; pair trajectory_kitti.txt with ground truth "
+                 "by time (trajectory.txt)\n";
   }
   std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
             << "map.dmap, report.json" << (plotted ? ", trajectory.png" : "") << ")\n";
+  if (signal != 0) {
+    std::cerr << "[run] interrupted by " << StopSignalName(signal) << ": the results cover the "
+              << done << " frames done of " << dataset->size() << " (report.json: "
+              << "summary.interrupted)\n";
+    return 128 + signal;  // As a shell reports a process ended by the signal (130 for SIGINT).
+  }
   return 0;
 }
 
@@ -286,13 +338,18 @@ const CommandRegistrar kRegistrar({
     "reconstruct the camera trajectory and a map from a dataset folder",
     "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
     "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
-    "         [--first_frame N] [--max_frames N] [--calibration FILE] [--dump_config]\n\n"
+    "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
+    "         [--dump_config]\n\n"
     "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
-    "writes into DIR: trajectory.txt (TUM, every frame), trajectory_kitti.txt, map.ply,\n"
-    "map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
-    "per-frame timings and counts, summary with ATE/RPE/KITTI errors when\n"
-    "the dataset has ground truth) and trajectory.png (estimate over ground truth).",
+    "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
+    "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
+    "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"
+    "ground truth) and trajectory.png (estimate over ground truth).\n\n"
+    "A frame whose image is missing, unreadable or of the wrong size is skipped with a warning\n"
+    "and reported lost, without a pose (--strict: exit 2 instead); the first frame must be\n"
+    "readable. Ctrl-C (SIGINT) or SIGTERM stops after the current frame: the results of the\n"
+    "frames done are written as usual, report.json says interrupted, exit status 128 + signal.",
     &RunRun,
     __FILE__});
 

@@ -9,6 +9,7 @@
 #include <chrono>
 
 #include "backend/ba/pose_block.h"
+#include "backend/ba/solver_time.h"
 
 namespace dala {
 namespace {
@@ -60,7 +61,9 @@ bool PoseGraphOptions::IsValid(std::string* why) const {
     return false;
   };
   if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
-  if (!(max_solver_time_in_seconds > 0.0)) return fail("max_solver_time_in_seconds must be > 0");
+  if (!(max_solver_time_in_seconds >= 0.0)) {
+    return fail("max_solver_time_in_seconds must be >= 0 (0: no time limit)");
+  }
   if (!(loss_scale > 0.0)) return fail("loss_scale must be > 0");
   if (num_threads < 1) return fail("num_threads must be >= 1");
   return true;
@@ -73,7 +76,8 @@ void SolvePoseGraphProblem(const PoseGraphOptions& options, ceres::Problem* prob
   solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   solver_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
   solver_options.max_num_iterations = options.max_num_iterations;
-  solver_options.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
+  solver_options.max_solver_time_in_seconds =
+      CeresSolverTimeLimit(options.max_solver_time_in_seconds);
   solver_options.num_threads = options.num_threads;
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary ceres_summary;

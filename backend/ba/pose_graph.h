@@ -38,8 +38,10 @@ struct PoseGraphEdge {
 };
 
 struct PoseGraphOptions {
-  int max_num_iterations = 100;
-  double max_solver_time_in_seconds = 5.0;
+  int max_num_iterations = 100;  // The work bound.
+  // 0 = no time limit (backend/ba/solver_time.h). A positive value is an opt-in budget that
+  // makes the corrected trajectory depend on the machine's load.
+  double max_solver_time_in_seconds = 0.0;
   RobustLoss loss = RobustLoss::kNone;  // Huber/Cauchy on the whitened edge error if wanted.
   double loss_scale = 3.5;              // on |r|; sqrt(chi2_6 95%) = 3.55.
   int num_threads = 1;

@@ -10,6 +10,7 @@
 
 #include "backend/ba/pose_block.h"
 #include "backend/ba/reprojection_factors.h"
+#include "backend/ba/solver_time.h"
 
 namespace dala {
 
@@ -20,7 +21,9 @@ bool PoseOnlyOptions::IsValid(std::string* why) const {
   };
   if (!(loss_scale > 0.0)) return fail("loss_scale must be > 0");
   if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
-  if (!(max_solver_time_in_seconds > 0.0)) return fail("max_solver_time_in_seconds must be > 0");
+  if (!(max_solver_time_in_seconds >= 0.0)) {
+    return fail("max_solver_time_in_seconds must be >= 0 (0: no time limit)");
+  }
   if (max_outlier_rounds < 0) return fail("max_outlier_rounds must be >= 0");
   if (min_inliers < 3) return fail("min_inliers must be >= 3 (a pose has 6 dof)");
   if (num_threads < 1) return fail("num_threads must be >= 1");
@@ -85,7 +88,8 @@ PoseOnlyResult EstimatePoseOnly(const StereoIntrinsics& K,
     ceres::Solver::Options solver_options;
     solver_options.linear_solver_type = ceres::DENSE_QR;
     solver_options.max_num_iterations = options.max_num_iterations;
-    solver_options.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
+    solver_options.max_solver_time_in_seconds =
+        CeresSolverTimeLimit(options.max_solver_time_in_seconds);
     solver_options.num_threads = options.num_threads;
     solver_options.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;

@@ -31,9 +31,10 @@ struct PoseOnlyOptions {
   // Scale of the loss on the whitened residual norm (pixels / sigma). sqrt(5.991) = 2.45: an
   // inlier at the mono 95% bound is still in the quadratic part.
   double loss_scale = 2.45;
-  int max_num_iterations = 10;
-  // A safety net (a solve takes ~3 ms); hitting it would make the run load-dependent.
-  double max_solver_time_in_seconds = 0.5;
+  int max_num_iterations = 10;  // Per solve: the work bound (a solve takes ~3 ms).
+  // Per solve; 0 = no time limit (backend/ba/solver_time.h). A positive value is an opt-in
+  // budget that makes the result depend on the machine's load.
+  double max_solver_time_in_seconds = 0.0;
   // Remove observations above the chi-square 95% quantile after a solve, and re-solve
   // (up to max_outlier_rounds times).
   bool remove_outliers = true;

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "backend/ba/reprojection_factors.h"
+#include "backend/ba/solver_time.h"
 
 namespace dala {
 
@@ -23,7 +24,9 @@ bool SlidingWindowBa::Options::IsValid(std::string* why) const {
   if (num_fixed_keyframes < -1) return fail("num_fixed_keyframes must be >= 0 (or -1 = auto)");
   if (!(loss_scale > 0.0)) return fail("loss_scale must be > 0");
   if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
-  if (!(max_solver_time_in_seconds > 0.0)) return fail("max_solver_time_in_seconds must be > 0");
+  if (!(max_solver_time_in_seconds >= 0.0)) {
+    return fail("max_solver_time_in_seconds must be >= 0 (0: no time limit)");
+  }
   if (!(function_tolerance > 0.0)) return fail("function_tolerance must be > 0");
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (max_outlier_rounds < 0) return fail("max_outlier_rounds must be >= 0");
@@ -333,7 +336,8 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
     solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
     solver_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
     solver_options.max_num_iterations = options_.max_num_iterations;
-    solver_options.max_solver_time_in_seconds = options_.max_solver_time_in_seconds;
+    solver_options.max_solver_time_in_seconds =
+        CeresSolverTimeLimit(options_.max_solver_time_in_seconds);
     solver_options.function_tolerance = options_.function_tolerance;
     solver_options.num_threads = options_.num_threads;
     solver_options.logging_type = ceres::SILENT;

@@ -14,14 +14,18 @@
 //   while (dataset->Next(&frame)) { ... }
 //
 // Errors in the folder (missing or malformed files, wrong image sizes, unreadable images) throw
-// dala::Error naming the file (and line) and the fix. Not thread-safe.
+// dala::Error naming the file (and line) and the fix. An image that cannot be used is found when
+// its frame is read: Next() throws FrameError, after which the caller may go on with the next
+// frame (`dala run` skips the frame unless --strict). Not thread-safe.
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 
 #include "core/camera.h"
+#include "core/error.h"
 #include "core/trajectory.h"
 #include "core/types.h"
 
@@ -33,6 +37,20 @@ const char* DatasetFormatName(DatasetFormat format);
 // Parses "auto", "kitti", "euroc", "tum", "synthetic"; throws dala::Error naming the accepted
 // values.
 DatasetFormat ParseDatasetFormat(const std::string& name);
+
+// Thrown by Dataset::Next for a frame whose image cannot be used (missing, undecodable, of the
+// wrong size). Next has moved past that frame: calling it again yields the frame after it.
+class FrameError : public Error {
+ public:
+  FrameError(FrameId frame, int64_t t_ns, const std::string& message)
+      : Error(message), frame_(frame), t_ns_(t_ns) {}
+  FrameId frame() const { return frame_; }
+  int64_t t_ns() const { return t_ns_; }
+
+ private:
+  FrameId frame_;
+  int64_t t_ns_ = 0;
+};
 
 // A sequence of frames, yielded in time order.
 class Dataset {
@@ -46,8 +64,8 @@ class Dataset {
   // Number of frames Next() yields from a Rewind().
   virtual size_t size() const = 0;
   // Loads the next frame; false at the end. Frame ids are the frame's index in the whole
-  // sequence (so with DatasetOptions::first_frame = 10 the first id is 10). Throws dala::Error on
-  // an unreadable image or one of the wrong size.
+  // sequence (so with DatasetOptions::first_frame = 10 the first id is 10). Throws FrameError
+  // on a missing or unreadable image or one of the wrong size.
   virtual bool Next(Frame* frame) = 0;
   virtual void Rewind() = 0;
   // Ground truth T_w_c0 (the rectified left camera in the dataset's world frame) at the times of
@@ -68,6 +86,12 @@ struct DatasetOptions {
   int first_frame = 0;
   // Yield at most this many frames; 0 for all.
   int max_frames = 0;
+  // An image that the index (times.txt, data.csv, rgb.txt) names for a frame in the range above
+  // but that the folder lacks: false makes OpenDataset throw dala::Error naming it; true logs a
+  // warning, and Next() throws FrameError for that frame (the caller skips it). The first frame
+  // of the range must exist either way (it fixes the image size). Frames outside the range are
+  // not checked.
+  bool allow_missing_images = false;
   // Ground truth is interpolated at a frame time only between two samples closer than this
   // (EuRoC has 200 Hz, TUM 100 Hz ground truth); a frame in a larger gap gets none.
   double max_ground_truth_gap_s = 0.1;

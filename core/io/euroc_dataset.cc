@@ -18,6 +18,7 @@ namespace {
 struct CsvImage {
   int64_t t_ns = 0;
   std::string file;
+  std::string where;  // "<data.csv>:<line>", for messages.
 };
 
 std::vector<CsvImage> ReadImageCsv(const std::string& cam_dir) {
@@ -46,11 +47,8 @@ std::vector<CsvImage> ReadImageCsv(const std::string& cam_dir) {
                     << " does not increase (previous " << images.back().t_ns
                     << "); sort the file by time";
     }
-    image.file = cam_dir + "/data/" + fields[1];
-    if (!fs::is_regular_file(image.file)) {
-      throw Error() << csv << ":" << line.number << ": missing image '" << image.file
-                    << "': restore it or remove the line";
-    }
+    image.file = cam_dir + "/data/" + fields[1];  // Checked for the frames to run (below).
+    image.where = csv + ":" + std::to_string(line.number);
     images.push_back(std::move(image));
   }
   if (images.empty()) throw Error() << csv << ": lists no image";
@@ -136,6 +134,7 @@ ImageSequence ReadEurocSequence(const std::string& folder, const DatasetOptions&
   const std::vector<CsvImage> images0 = ReadImageCsv(cam0_dir);
 
   ImageSequence seq;
+  std::vector<std::string> left_where, right_where;  // Per frame, the data.csv lines.
   seq.format = DatasetFormat::kEuroc;
   seq.path = folder;
   seq.raw_size = cv::Size(cam0.camera.width, cam0.camera.height);
@@ -149,8 +148,8 @@ ImageSequence ReadEurocSequence(const std::string& folder, const DatasetOptions&
                     << cam1.camera.height << " differs from cam0's " << cam0.camera.width << "x"
                     << cam0.camera.height;
     }
-    std::map<int64_t, std::string> right_by_time;
-    for (const CsvImage& image : ReadImageCsv(cam1_dir)) right_by_time[image.t_ns] = image.file;
+    std::map<int64_t, CsvImage> right_by_time;
+    for (CsvImage& image : ReadImageCsv(cam1_dir)) right_by_time[image.t_ns] = std::move(image);
     size_t unpaired = 0;
     for (const CsvImage& image : images0) {
       const auto it = right_by_time.find(image.t_ns);
@@ -160,7 +159,9 @@ ImageSequence ReadEurocSequence(const std::string& folder, const DatasetOptions&
       }
       seq.t_ns.push_back(image.t_ns);
       seq.left_files.push_back(image.file);
-      seq.right_files.push_back(it->second);
+      left_where.push_back(image.where);
+      seq.right_files.push_back(it->second.file);
+      right_where.push_back(it->second.where);
     }
     if (unpaired > 0) {
       LOG(WARNING) << cam0_dir << ": " << unpaired << " of " << images0.size()
@@ -210,11 +211,24 @@ ImageSequence ReadEurocSequence(const std::string& folder, const DatasetOptions&
     for (const CsvImage& image : images0) {
       seq.t_ns.push_back(image.t_ns);
       seq.left_files.push_back(image.file);
+      left_where.push_back(image.where);
     }
     seq.rig.left = MakeUndistortionMaps(cam0.camera, &seq.left_map1, &seq.left_map2);
   }
+  const FrameRange range = SelectFrames(seq.t_ns.size(), options, folder);
+  std::vector<MissingImage> missing;
+  for (size_t i = range.begin; i < range.end; ++i) {
+    std::string message;
+    if (!fs::is_regular_file(seq.left_files[i])) {
+      message = left_where[i] + ": missing image '" + seq.left_files[i] + "'";
+    } else if (stereo && !fs::is_regular_file(seq.right_files[i])) {
+      message = right_where[i] + ": missing image '" + seq.right_files[i] + "'";
+    }
+    if (!message.empty()) missing.push_back({i, message + ": restore it or remove the line"});
+  }
+  CheckMissingImages(missing, range, options, folder);
   // Fail early on a first image of the wrong size.
-  LoadGrayImage(seq.left_files[0], seq.raw_size, seq.raw_size_source);
+  LoadGrayImage(seq.left_files[range.begin], seq.raw_size, seq.raw_size_source);
 
   const std::string gt_path = mav0 + "/state_groundtruth_estimate0/data.csv";
   if (fs::is_regular_file(gt_path)) {

@@ -45,8 +45,12 @@ class ImageSequenceDataset : public Dataset {
     Frame f;
     f.id = FrameId(static_cast<int64_t>(i));
     f.t_ns = seq_.t_ns[i];
-    f.left = Load(seq_.left_files[i], seq_.left_map1, seq_.left_map2);
-    if (is_stereo()) f.right = Load(seq_.right_files[i], seq_.right_map1, seq_.right_map2);
+    try {
+      f.left = Load(seq_.left_files[i], seq_.left_map1, seq_.left_map2);
+      if (is_stereo()) f.right = Load(seq_.right_files[i], seq_.right_map1, seq_.right_map2);
+    } catch (const Error& e) {
+      throw FrameError(f.id, f.t_ns, e.message());
+    }
     if (!seq_.T_w_c0_gt.empty()) f.T_w_c0_gt = seq_.T_w_c0_gt[i];
     if (!seq_.T_w_odom.empty()) f.T_w_odom = seq_.T_w_odom[i];
     *frame = std::move(f);
@@ -79,15 +83,36 @@ std::unique_ptr<Dataset> MakeImageSequenceDataset(ImageSequence sequence,
   std::string why;
   CHECK(sequence.rig.IsValid(&why)) << sequence.path << ": " << why;
   CHECK(!sequence.rig.left.HasDistortion()) << "the rig a Dataset yields has no distortion";
-  if (n == 0) throw Error() << sequence.path << ": the dataset has no frames";
-  const size_t begin = static_cast<size_t>(options.first_frame);
-  if (begin >= n) {
-    throw Error() << "first frame " << options.first_frame << " is past the end of '"
-                  << sequence.path << "' (" << n << " frames)";
+  const FrameRange range = SelectFrames(n, options, sequence.path);
+  return std::make_unique<ImageSequenceDataset>(std::move(sequence), range.begin, range.end);
+}
+
+FrameRange SelectFrames(size_t n, const DatasetOptions& options, const std::string& path) {
+  if (n == 0) throw Error() << path << ": the dataset has no frames";
+  FrameRange range;
+  range.begin = static_cast<size_t>(options.first_frame);
+  if (range.begin >= n) {
+    throw Error() << "first frame " << options.first_frame << " is past the end of '" << path
+                  << "' (" << n << " frames)";
   }
-  size_t end = n;
-  if (options.max_frames > 0) end = std::min(n, begin + static_cast<size_t>(options.max_frames));
-  return std::make_unique<ImageSequenceDataset>(std::move(sequence), begin, end);
+  range.end = n;
+  if (options.max_frames > 0) {
+    range.end = std::min(n, range.begin + static_cast<size_t>(options.max_frames));
+  }
+  return range;
+}
+
+void CheckMissingImages(const std::vector<MissingImage>& missing, const FrameRange& range,
+                        const DatasetOptions& options, const std::string& path) {
+  if (missing.empty()) return;
+  if (missing.front().frame == range.begin) {
+    throw Error() << missing.front().message << " (it is the first frame of the run, which "
+                  << "cannot be skipped: --first_frame " << range.begin + 1 << " starts after it)";
+  }
+  if (!options.allow_missing_images) throw Error() << missing.front().message;
+  LOG(WARNING) << path << ": frames to run with a missing image: " << missing.size() << " of "
+               << range.end - range.begin
+               << "; they are skipped (reported lost). The first: " << missing.front().message;
 }
 
 cv::Mat LoadGrayImage(const std::string& path, const cv::Size& expected,

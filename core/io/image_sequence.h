@@ -32,6 +32,26 @@ struct ImageSequence {
   cv::Mat left_map1, left_map2, right_map1, right_map2;
 };
 
+// The frames [begin, end) that options.first_frame / max_frames select of a sequence of n frames.
+// Throws dala::Error naming `path` when there is no frame or first_frame is past the end.
+struct FrameRange {
+  size_t begin = 0;
+  size_t end = 0;
+};
+FrameRange SelectFrames(size_t n, const DatasetOptions& options, const std::string& path);
+
+// An image file the index names for a selected frame, absent from the folder (one per frame).
+struct MissingImage {
+  size_t frame = 0;
+  std::string message;  // Names the file and the fix, as an error would.
+};
+// Refuses the missing images (dala::Error with the first message) unless
+// options.allow_missing_images, which logs one warning instead (their frames are skipped when
+// read: Next() throws FrameError). A missing image of the range's first frame is refused either
+// way: that frame fixes the image size and the world frame.
+void CheckMissingImages(const std::vector<MissingImage>& missing, const FrameRange& range,
+                        const DatasetOptions& options, const std::string& path);
+
 // Plays a sequence, honouring options.first_frame / max_frames. Throws dala::Error when
 // first_frame is past the end.
 std::unique_ptr<Dataset> MakeImageSequenceDataset(ImageSequence sequence,

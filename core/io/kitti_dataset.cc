@@ -111,34 +111,39 @@ ImageSequence ReadKittiSequence(const std::string& folder, const DatasetOptions&
   seq.path = folder;
   seq.t_ns = ReadTimesFile(folder + "/times.txt");  // Throws on a missing file, bad order.
   const size_t n = seq.t_ns.size();
+  // Fewer images than times: the frames without one are checked below (in the range to run).
   const size_t n_images = CountPngs(left_dir);
-  if (n_images != n) {
+  if (n_images > n) {
     throw Error() << folder << "/times.txt has " << n << " times but " << left_dir << " holds "
                   << n_images << " PNG images: one time per image is needed";
   }
+  const FrameRange range = SelectFrames(n, options, folder);
+  std::vector<MissingImage> missing;
   for (size_t i = 0; i < n; ++i) {
     seq.left_files.push_back(left_dir + "/" + ImageName(i));
+    if (stereo) seq.right_files.push_back(right_dir + "/" + ImageName(i));
+    if (i < range.begin || i >= range.end) continue;
     if (!fs::is_regular_file(seq.left_files.back())) {
-      throw Error() << "missing left image '" << seq.left_files.back()
-                    << "': images must be numbered 000000.png to " << ImageName(n - 1);
-    }
-    if (stereo) {
-      seq.right_files.push_back(right_dir + "/" + ImageName(i));
-      if (!fs::is_regular_file(seq.right_files.back())) {
-        throw Error() << "missing right image '" << seq.right_files.back()
-                      << "' (the left one exists): restore it or read the sequence as "
-                      << "monocular (force_mono / --mode mono)";
-      }
+      missing.push_back({i, "missing left image '" + seq.left_files.back() +
+                                "': images must be numbered 000000.png to " + ImageName(n - 1) +
+                                ", one per line of times.txt"});
+    } else if (stereo && !fs::is_regular_file(seq.right_files.back())) {
+      missing.push_back({i, "missing right image '" + seq.right_files.back() +
+                                "' (the left one exists): restore it or read the sequence as "
+                                "monocular (force_mono / --mode mono)"});
     }
   }
+  CheckMissingImages(missing, range, options, folder);
 
-  // Calibration: the override YAML or calib.txt; the image size from the YAML or the first image.
-  const cv::Mat first = LoadGrayImage(seq.left_files[0], cv::Size(), "");
+  // Calibration: the override YAML or calib.txt; the image size from the YAML or the first image
+  // of the run.
+  const std::string& first_file = seq.left_files[range.begin];
+  const cv::Mat first = LoadGrayImage(first_file, cv::Size(), "");
   if (!options.calibration_yaml.empty()) {
     seq.rig = ReadCalibrationYaml(options.calibration_yaml);
     seq.raw_size = cv::Size(seq.rig.left.width, seq.rig.left.height);
     seq.raw_size_source = "the calibration " + options.calibration_yaml;
-    LoadGrayImage(seq.left_files[0], seq.raw_size, seq.raw_size_source);
+    LoadGrayImage(first_file, seq.raw_size, seq.raw_size_source);
     if (stereo && !seq.rig.is_stereo()) {
       throw Error() << options.calibration_yaml << ": no 'baseline' for the stereo sequence "
                     << folder << ": add it (metres) or read the sequence as monocular";
@@ -150,7 +155,7 @@ ImageSequence ReadKittiSequence(const std::string& folder, const DatasetOptions&
   } else {
     seq.rig = RigFromCalib(folder + "/calib.txt", stereo);
     seq.raw_size = first.size();
-    seq.raw_size_source = "the first image " + seq.left_files[0];
+    seq.raw_size_source = "the first image " + first_file;
     seq.rig.left.width = first.cols;
     seq.rig.left.height = first.rows;
   }

@@ -35,6 +35,7 @@ ImageSequence ReadTumSequence(const std::string& folder, const DatasetOptions& o
   RequireFile(list, "the image list 't filename'");
 
   ImageSequence seq;
+  std::vector<int> line_of;  // Per frame, its line in rgb.txt (for messages).
   seq.format = DatasetFormat::kTum;
   seq.path = folder;
   for (const NumberedLine& line : ReadDataLines(list, "the TUM image list")) {
@@ -48,15 +49,19 @@ ImageSequence ReadTumSequence(const std::string& folder, const DatasetOptions& o
       throw Error() << list << ":" << line.number << ": time " << fields[0]
                     << " does not increase; sort the file by time";
     }
-    const std::string file = folder + "/" + fields[1];
-    if (!fs::is_regular_file(file)) {
-      throw Error() << list << ":" << line.number << ": missing image '" << file
-                    << "': restore it or remove the line";
-    }
     seq.t_ns.push_back(t_ns);
-    seq.left_files.push_back(file);
+    seq.left_files.push_back(folder + "/" + fields[1]);
+    line_of.push_back(line.number);
   }
   if (seq.t_ns.empty()) throw Error() << list << ": lists no image";
+  const FrameRange range = SelectFrames(seq.t_ns.size(), options, folder);
+  std::vector<MissingImage> missing;
+  for (size_t i = range.begin; i < range.end; ++i) {
+    if (fs::is_regular_file(seq.left_files[i])) continue;
+    missing.push_back({i, list + ":" + std::to_string(line_of[i]) + ": missing image '" +
+                              seq.left_files[i] + "': restore it or remove the line"});
+  }
+  CheckMissingImages(missing, range, options, folder);
 
   PinholeCamera raw;
   if (!options.calibration_yaml.empty()) {
@@ -77,7 +82,7 @@ ImageSequence ReadTumSequence(const std::string& folder, const DatasetOptions& o
   seq.raw_size = cv::Size(raw.width, raw.height);
   seq.rig.left =
       raw.HasDistortion() ? MakeUndistortionMaps(raw, &seq.left_map1, &seq.left_map2) : raw;
-  LoadGrayImage(seq.left_files[0], seq.raw_size, seq.raw_size_source);
+  LoadGrayImage(seq.left_files[range.begin], seq.raw_size, seq.raw_size_source);
 
   const std::string gt_path = folder + "/groundtruth.txt";
   if (fs::is_regular_file(gt_path)) {

@@ -59,7 +59,6 @@ std::vector<Pose> RunBatch(const BaScene& scene, SlidingWindowBa::Options option
                            SlidingWindowBa::Summary* summary = nullptr) {
   options.window_size = static_cast<int>(scene.keyframes.size());
   options.max_num_iterations = 50;
-  options.max_solver_time_in_seconds = 20.0;
   SlidingWindowBa ba(scene.K, options);
   const auto T_prev_cur = NoisyRelativeMotions(scene, seed);
   Pose T_w_c = scene.T_w_c_gt[0];
@@ -204,7 +203,6 @@ TEST(SlidingWindowBaTest, MonoConvergesWithTwoFixedKeyframes) {
   SlidingWindowBa::Options options;
   options.window_size = so.num_keyframes;
   options.max_num_iterations = 50;
-  options.max_solver_time_in_seconds = 20.0;
   SlidingWindowBa ba(scene.K, options);
   std::mt19937 rng(11);
   std::normal_distribution<double> n(0.0, 0.1);
@@ -255,7 +253,6 @@ TEST(SlidingWindowBaTest, GrossOutliersAreRemoved) {
   SlidingWindowBa::Options options;
   options.window_size = so.num_keyframes;
   options.max_num_iterations = 30;
-  options.max_solver_time_in_seconds = 20.0;
   SlidingWindowBa ba(scene.K, options);
   for (size_t i = 0; i < scene.keyframes.size(); ++i) {
     BaKeyframe kf = scene.keyframes[i];

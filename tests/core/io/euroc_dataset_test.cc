@@ -156,6 +156,18 @@ TEST(EurocDataset, Errors) {
     const std::string seq = fresh("missing_image");
     std::filesystem::remove(seq + "/mav0/cam1/data/" + std::to_string(kT0 + kDt) + ".png");
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("cam1/data.csv:3: missing image"));
+    // Not in the range to run: not checked. Allowed: that frame is a FrameError when read.
+    DatasetOptions options;
+    options.max_frames = 1;
+    EXPECT_NO_THROW(OpenDataset(seq, options));
+    options.max_frames = 0;
+    options.allow_missing_images = true;
+    auto dataset = OpenDataset(seq, options);
+    Frame frame;
+    ASSERT_TRUE(dataset->Next(&frame));
+    EXPECT_THAT(ErrorOf([&] { dataset->Next(&frame); }), HasSubstr("missing image"));
+    ASSERT_TRUE(dataset->Next(&frame));
+    EXPECT_EQ(frame.id.value, 2);
   }
   {
     // No cam1 image pairs with a cam0 one: the message names the `dala run` flag that exists.

@@ -251,6 +251,74 @@ TEST(KittiDataset, ErrorsNameTheFileAndTheFix) {
   }
 }
 
+// The frames Next() yields and the frames it reports as bad (FrameError), in order.
+std::vector<std::string> Play(Dataset* dataset) {
+  std::vector<std::string> out;
+  Frame frame;
+  for (;;) {
+    try {
+      if (!dataset->Next(&frame)) return out;
+      out.push_back(std::to_string(frame.id.value));
+    } catch (const FrameError& e) {
+      out.push_back("bad " + std::to_string(e.frame().value) + " at " +
+                    std::to_string(e.t_ns()) + ": " + e.what());
+    }
+  }
+}
+
+// allow_missing_images: a missing or undecodable image of a frame after the first is a
+// FrameError of that frame only, and the frames after it are read; without the option a
+// missing image in the range to run is refused when opening; frames outside the range are not
+// checked (times.txt may list more frames than the folder holds).
+TEST(KittiDataset, BadImagesAfterTheFirstFrameAreFrameErrors) {
+  TempDir dir;
+  const std::string seq = dir / "seq";
+  KittiFixture fixture;
+  fixture.frames = 6;
+  WriteKittiFolder(seq, fixture);
+  std::filesystem::remove(seq + "/image_0/" + KittiName(2));
+  WriteText(seq + "/image_1/" + KittiName(3), "this is not a png");
+  std::filesystem::remove(seq + "/image_1/" + KittiName(5));
+  DatasetOptions lenient;
+  lenient.allow_missing_images = true;
+  const std::vector<std::string> played = Play(OpenDataset(seq, lenient).get());
+  ASSERT_EQ(played.size(), 6u);
+  EXPECT_EQ(played[0], "0");
+  EXPECT_EQ(played[1], "1");
+  EXPECT_THAT(played[2], HasSubstr("bad 2 at 200000000: missing image '" + seq +
+                                   "/image_0/000002.png'"));
+  EXPECT_THAT(played[3], HasSubstr("bad 3 at 300000000: cannot decode image '" + seq +
+                                   "/image_1/000003.png'"));
+  EXPECT_EQ(played[4], "4");
+  EXPECT_THAT(played[5], HasSubstr("bad 5"));
+
+  EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }),
+              HasSubstr("missing left image '" + seq + "/image_0/000002.png'"));
+  DatasetOptions first_two;
+  first_two.max_frames = 2;
+  EXPECT_EQ(Play(OpenDataset(seq, first_two).get()), (std::vector<std::string>{"0", "1"}));
+  DatasetOptions from_four;
+  from_four.first_frame = 4;
+  from_four.max_frames = 1;
+  EXPECT_EQ(Play(OpenDataset(seq, from_four).get()), (std::vector<std::string>{"4"}));
+
+  // The first frame of the run fixes the image size: never skipped.
+  lenient.first_frame = 2;
+  const std::string first = ErrorOf([&] { OpenDataset(seq, lenient); });
+  EXPECT_THAT(first, HasSubstr("image_0/000002.png"));
+  EXPECT_THAT(first, HasSubstr("--first_frame 3 starts after it"));
+
+  // times.txt lists two frames more than the folder holds.
+  WriteText(seq + "/times.txt", "0\n0.1\n0.2\n0.3\n0.4\n0.5\n0.6\n0.7\n");
+  std::filesystem::remove(seq + "/poses.txt");
+  EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("missing left image"));
+  lenient.first_frame = 4;
+  const std::vector<std::string> tail = Play(OpenDataset(seq, lenient).get());
+  ASSERT_EQ(tail.size(), 4u);
+  EXPECT_EQ(tail[0], "4");
+  EXPECT_THAT(tail[3], HasSubstr("bad 7 at 700000000: missing image"));
+}
+
 TEST(KittiDataset, CalibrationOverride) {
   TempDir dir;
   KittiFixture fixture;

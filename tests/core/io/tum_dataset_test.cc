@@ -115,6 +115,30 @@ TEST(TumDataset, Errors) {
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("rgb.txt:1: missing image"));
   }
   {
+    // rgb.txt lists a third image the folder lacks: refused, unless it is outside the range
+    // to run, or allowed (then that frame is a FrameError when read).
+    const std::string seq = fresh("fr1_missing_third");
+    std::filesystem::remove(seq + "/rgb/1305031102.375304.png");
+    EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("rgb.txt:5: missing image"));
+    DatasetOptions options;
+    options.max_frames = 2;
+    EXPECT_EQ(OpenDataset(seq, options)->size(), 2u);
+    options.max_frames = 0;
+    options.allow_missing_images = true;
+    auto dataset = OpenDataset(seq, options);
+    Frame frame;
+    ASSERT_TRUE(dataset->Next(&frame));
+    ASSERT_TRUE(dataset->Next(&frame));
+    try {
+      dataset->Next(&frame);
+      ADD_FAILURE() << "a missing image should be a FrameError";
+    } catch (const FrameError& e) {
+      EXPECT_EQ(e.frame().value, 2);
+      EXPECT_THAT(e.what(), HasSubstr("1305031102.375304.png"));
+    }
+    EXPECT_FALSE(dataset->Next(&frame));
+  }
+  {
     const std::string seq = fresh("fr1_fields");
     WriteText(seq + "/rgb.txt", "1305031102.175304\n");
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("expected 't filename'"));

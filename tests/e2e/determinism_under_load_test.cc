@@ -1,0 +1,96 @@
+// `dala run` twice on the same rendered loop while busy processes load every core: the outputs
+// are byte-identical. The solvers stop on iteration limits only, never on the wall clock
+// (backend/ba/solver_time.h), so a loaded machine cannot change a result (DESIGN.md).
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/sim/dataset_writer.h"
+#include "core/sim/synthetic_sequence.h"
+#include "tests/test_util.h"
+
+namespace dala {
+namespace {
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream is(path);
+  return std::string(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
+}
+
+// Child processes that spin until the object dies.
+class BusyLoad {
+ public:
+  explicit BusyLoad(int processes) {
+    for (int i = 0; i < processes; ++i) {
+      const pid_t pid = fork();
+      if (pid == 0) {
+        volatile unsigned long spin = 0;
+        for (;;) spin = spin + 1;
+      }
+      if (pid > 0) pids_.push_back(pid);
+    }
+  }
+  ~BusyLoad() {
+    for (const pid_t pid : pids_) {
+      kill(pid, SIGKILL);
+      waitpid(pid, nullptr, 0);
+    }
+  }
+  size_t size() const { return pids_.size(); }
+
+ private:
+  std::vector<pid_t> pids_;
+};
+
+// report.json without what measures time (per-frame "ms", fps and the ms tables).
+nlohmann::json WithoutTimings(nlohmann::json report) {
+  for (nlohmann::json& frame : report.at("frames")) frame.erase("ms");
+  nlohmann::json& summary = report.at("summary");
+  for (const char* key :
+       {"fps", "ms_mean", "ms_median", "ms_p95", "ms_max", "stages_ms", "loop_ms_per_keyframe"}) {
+    EXPECT_TRUE(summary.contains(key)) << key;
+    summary.erase(key);
+  }
+  return report;
+}
+
+TEST(DeterminismUnderLoad, TwoRunsGiveIdenticalFiles) {
+  testing::TempDir dir;
+  // The small loop (125 m) at 3 Hz, small images: ~3 s a run unloaded, and it closes loops, so
+  // the window BA, the pose-only tracking and the pose graph all solve under load.
+  sim::SimOptions sim;
+  sim.preset = "small_loop";
+  sim.fps = 3;
+  sim.width = 320;
+  sim.height = 240;
+  sim.fx = sim.fy = 200;
+  sim::WriteSyntheticDataset(sim, dir / "seq", false);
+
+  const BusyLoad load(static_cast<int>(std::max(2u, std::thread::hardware_concurrency())));
+  ASSERT_GE(load.size(), 2u);
+  for (const char* out : {"a", "b"}) {
+    const std::string cmd = std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " +
+                            (dir / out) + " --progress=false > " + (dir / out) + ".log 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadAll(dir / out + std::string(".log"));
+  }
+  for (const char* file : {"trajectory.txt", "trajectory_kitti.txt", "map.ply", "map.dmap"}) {
+    const std::string a = ReadAll(dir / (std::string("a/") + file));
+    EXPECT_FALSE(a.empty()) << file;
+    EXPECT_TRUE(a == ReadAll(dir / (std::string("b/") + file))) << file << " differs";
+  }
+  const nlohmann::json a = nlohmann::json::parse(ReadAll(dir / "a/report.json"));
+  const nlohmann::json b = nlohmann::json::parse(ReadAll(dir / "b/report.json"));
+  EXPECT_GE(a.at("summary").at("loops_closed").get<int>(), 1) << "the pose graph did not run";
+  EXPECT_EQ(WithoutTimings(a), WithoutTimings(b));
+}
+
+}  // namespace
+}  // namespace dala
