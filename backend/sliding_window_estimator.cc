@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <sstream>
 
 #include <opencv2/calib3d.hpp>
@@ -175,18 +176,25 @@ void SlidingWindowEstimator::SolveWindow(KeyframeId id) {
 }
 
 std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& m) const {
+  return PnpPose(
+      m, [&](LandmarkId id) { return unconfirmed_loop_landmarks_.count(id) == 0; },
+      2 * options_.pose_only.min_inliers);
+}
+
+std::optional<Pose> SlidingWindowEstimator::PnpPose(
+    const FrameMeasurement& m, const std::function<bool(LandmarkId)>& use,
+    int min_inliers) const {
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   std::vector<BaObservation> observations;
   for (const FeatureObservation& o : m.observations) {
-    if (unconfirmed_loop_landmarks_.count(o.landmark)) continue;
+    if (!use(o.landmark)) continue;
     const std::optional<Eigen::Vector3d> p_w = ba_.LandmarkPosition(o.landmark);
     if (!p_w) continue;
     object.emplace_back(p_w->x(), p_w->y(), p_w->z());
     image.emplace_back(o.uv.x(), o.uv.y());
     observations.push_back(ToBa(o));
   }
-  const int min_inliers = 2 * options_.pose_only.min_inliers;
   if (static_cast<int>(object.size()) < min_inliers) return std::nullopt;
   cv::Mat K;
   cv::eigen2cv(rig_.left.K(), K);
@@ -198,16 +206,16 @@ std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& 
                                         std::sqrt(kChi2Quantile95Dof2), 0.999, inliers,
                                         cv::SOLVEPNP_EPNP);
   if (!found || static_cast<int>(inliers.size()) < min_inliers) {
-    VLOG(1) << "frame " << m.frame << ": PnP recovery failed (" << inliers.size() << " inliers of "
+    VLOG(1) << "frame " << m.frame << ": PnP failed (" << inliers.size() << " inliers of "
             << object.size() << ")";
     return std::nullopt;
   }
   const Pose guess = PoseFromRvecTvec(rvec, tvec).inverse();  // OpenCV gives T_c_w.
-  // Refined over every known landmark (the window's and older ones), outliers rejected.
+  // Refined over the same landmarks, outliers rejected.
   const PoseOnlyResult r = EstimatePoseOnly(
       IntrinsicsOf(rig_, ba_.disparity_offset_px()), observations,
       [&](LandmarkId id) { return ba_.LandmarkPosition(id); }, guess, options_.pose_only);
-  VLOG(1) << "frame " << m.frame << ": PnP recovery " << inliers.size() << " inliers of "
+  VLOG(1) << "frame " << m.frame << ": PnP " << inliers.size() << " inliers of "
           << object.size() << ", pose-only " << PoseOnlyStatusName(r.status) << " ("
           << r.num_inliers << " inliers)";
   if (r.status != PoseOnlyStatus::kOk || r.num_inliers < min_inliers) return std::nullopt;
@@ -357,7 +365,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   }
   // One camera: the loop closes from the tracked pose (the similarity moves it).
   if (!stereo && out.valid && m.is_keyframe && m.loop && options_.loop.enable) {
-    out.loop_closed = CloseMonoLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
+    out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c);
     // The frontend gave the recognised points their old ids; unconfirmed in 3D, the old
     // landmarks' estimates would be outliers of the drifted neighbourhood: never used.
     if (!out.loop_closed) {

@@ -61,6 +61,7 @@
 // keyframes follow (stored relative to keyframes). The relabelled observations (old landmark
 // ids) then join the window at the moved positions.
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <set>
@@ -109,6 +110,11 @@ struct BaLoopClosureOptions {
   // landmarks (backend/mono/loop_sim3.h).
   double mono_scale_sigma = 0.01;
   double mono_loop_scale_sigma = 0.01;
+  // ...and when too few recognised landmarks are mapped on both sides for the similarity: the
+  // loop edge from the PnP pose on the old landmarks (at least this many inliers), its scale
+  // left to the graph (this log-scale sigma).
+  int mono_pnp_min_inliers = 8;
+  double mono_pnp_scale_sigma = 1.0;
   LoopSim3Options sim3;
 
   bool IsValid(std::string* why) const;
@@ -170,6 +176,10 @@ class SlidingWindowEstimator : public Estimator {
   // of a landmark with a position (the window's and older ones: relocalisation in the map) by
   // RANSAC PnP (OpenCV EPnP, seeded), then pose-only over them; nullopt if too few agree.
   std::optional<Pose> RecoverPose(const FrameMeasurement& m) const;
+  // RANSAC PnP (OpenCV EPnP, seeded) on m's observations of the landmarks `use` accepts that
+  // have a position, then pose-only over them; nullopt with fewer than min_inliers inliers.
+  std::optional<Pose> PnpPose(const FrameMeasurement& m,
+                              const std::function<bool(LandmarkId)>& use, int min_inliers) const;
   // Mono: keyframe `id` (frame m) is the last one; its observations are the candidates for new
   // landmarks at the next keyframe.
   void RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m);
@@ -183,10 +193,12 @@ class SlidingWindowEstimator : public Estimator {
   // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame
   // is not a keyframe or the solve fails.
   bool CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
-  // One camera: the same over Sim(3) (backend/ba/sim3_pose_graph.h), the loop edge from the
-  // similarity of the recognised landmarks' two estimates; *T_w_c is the keyframe's tracked
-  // pose. Frames between keyframes and the velocity are rescaled with their keyframe.
-  bool CloseMonoLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
+  // One camera (m.loop): the same over Sim(3) (backend/ba/sim3_pose_graph.h), the loop edge from
+  // the similarity of the recognised landmarks' two estimates, or, when too few are mapped on
+  // both sides, from the PnP pose of m on the old landmarks with a free scale; *T_w_c is the
+  // keyframe's tracked pose. Frames between keyframes and the velocity are rescaled with their
+  // keyframe.
+  bool CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id, Pose* T_w_c);
   // Optimises the window with the new keyframe `id` and records the new estimates
   // (keyframe_poses_, map_points_). Runs on solver_ when options_.background_solve.
   void SolveWindow(KeyframeId id);

@@ -2,6 +2,9 @@
 // an SE(3) pose graph when the scale is observed (stereo), a Sim(3) one with one camera.
 #include <glog/logging.h>
 
+#include <set>
+#include <string>
+
 #include "backend/mono/loop_sim3.h"
 #include "backend/sliding_window_estimator.h"
 
@@ -95,8 +98,9 @@ bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur
   return true;
 }
 
-bool SlidingWindowEstimator::CloseMonoLoop(const LoopDetection& loop, KeyframeId cur_id,
+bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id,
                                            Pose* T_w_c) {
+  const LoopDetection& loop = *m.loop;
   const auto old = keyframe_of_frame_.find(loop.old_frame);
   if (old == keyframe_of_frame_.end()) {
     LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
@@ -114,11 +118,24 @@ bool SlidingWindowEstimator::CloseMonoLoop(const LoopDetection& loop, KeyframeId
   }
   const std::optional<LoopSim3> sim3 =
       EstimateLoopSim3(p_cur, p_old, T_w_c->translation(), options_.loop.sim3);
-  if (!sim3) {
+  // The current keyframe in the old neighbourhood: its pose by PnP on the old landmarks (image
+  // residuals: more accurate than the similarity's rotation from noisy monocular depths), its
+  // scale from the similarity (else left to the graph); the similarity alone without a PnP.
+  std::set<LandmarkId> old_ids;
+  for (const auto& ids : loop.relabelled) old_ids.insert(ids.second);
+  const std::optional<Pose> T_w_cur_old =
+      PnpPose(m, [&](LandmarkId id) { return old_ids.count(id) > 0; },
+              options_.loop.mono_pnp_min_inliers);
+  if (!sim3 && !T_w_cur_old) {
     VLOG(1) << "loop to frame " << loop.old_frame << ": no Sim(3) from " << p_cur.size()
-            << " landmarks mapped on both sides: ignored";
+            << " landmarks mapped on both sides, no PnP on the old ones: ignored";
     return false;
   }
+  Sim3 S_w_cur_in_old =
+      sim3 ? sim3->S_old_cur * Sim3{*T_w_c, 1.0} : Sim3{*T_w_cur_old, 1.0};
+  if (T_w_cur_old) S_w_cur_in_old.T = *T_w_cur_old;
+  const double loop_scale_sigma =
+      sim3 ? options_.loop.mono_loop_scale_sigma : options_.loop.mono_pnp_scale_sigma;
   // Nodes at the current estimates, scale 1 (the map's unit everywhere).
   std::map<KeyframeId, Sim3> S_w_kf;
   for (const auto& [id, pose] : keyframe_poses_) S_w_kf[id] = Sim3{KeyframePoseNow(id), 1.0};
@@ -139,8 +156,8 @@ bool SlidingWindowEstimator::CloseMonoLoop(const LoopDetection& loop, KeyframeId
   Sim3Edge loop_edge;
   loop_edge.from = old->second;
   loop_edge.to = cur_id;
-  loop_edge.S_from_to = S_w_kf.at(old->second).Inverse() * (sim3->S_old_cur * S_w_kf.at(cur_id));
-  loop_edge.information = info.WithScale(info.Loop(loop.cov), options_.loop.mono_loop_scale_sigma);
+  loop_edge.S_from_to = S_w_kf.at(old->second).Inverse() * S_w_cur_in_old;
+  loop_edge.information = info.WithScale(info.Loop(Matrix6d::Zero()), loop_scale_sigma);
   loop_edge.is_loop = true;
   edges.insert(edges.end(), mono_loop_edges_.begin(), mono_loop_edges_.end());
   edges.push_back(loop_edge);
@@ -153,9 +170,12 @@ bool SlidingWindowEstimator::CloseMonoLoop(const LoopDetection& loop, KeyframeId
     return false;
   }
   VLOG(1) << "mono loop closed: keyframe " << loop_edge.from << " (frame " << loop.old_frame
-          << ") -> new keyframe " << cur_id << ", " << sim3->inliers << " of " << p_cur.size()
-          << " landmarks agree, scale " << sim3->S_old_cur.scale << ", pose graph cost "
-          << summary.initial_cost << " -> " << summary.final_cost;
+          << ") -> new keyframe " << cur_id << " by "
+          << (T_w_cur_old ? "PnP on the old landmarks" : "the similarity")
+          << (sim3 ? ", scale from " + std::to_string(sim3->inliers) + " landmarks"
+                   : std::string(", scale free"))
+          << ", pose graph cost " << summary.initial_cost << " -> " << summary.final_cost
+          << ", current scale " << corrected.at(cur_id).scale;
   // Every keyframe k's unit becomes the world's again: its camera coordinates grow by s_k
   // (p_k' = s_k p_k), so a stored loop edge a -> b is re-expressed as
   //   S_a_b' = (R, s_a t, s s_a / s_b).
