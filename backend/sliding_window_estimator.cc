@@ -45,6 +45,7 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
     return fail("ba.max_new_landmarks_per_keyframe must be >= 10");
   if (grid_cols < 1 || grid_rows < 1) return fail("ba.grid_cols and ba.grid_rows must be >= 1");
   if (max_landmark_depth_m <= 0) return fail("ba.max_landmark_depth_m must be > 0");
+  if (mono_reinit_after_lost_frames < 1) return fail("ba.mono_reinit_after_lost_frames must be >= 1");
   return mono_init.IsValid(why);
 }
 
@@ -242,23 +243,61 @@ Pose SlidingWindowEstimator::PredictPose(const FrameMeasurement& m) const {
   return Orthonormalized(T_w_prev_ * velocity);
 }
 
+void SlidingWindowEstimator::NoteMonoTracking(const FrameMeasurement& m, bool valid,
+                                              const Pose& T_w_c, EstimatorOutput* out) {
+  if (valid) {
+    if (last_tracked_ && m.t_ns > last_tracked_->t_ns) {
+      last_tracked_->velocity_w = (T_w_c.translation() - last_tracked_->T_w_c.translation()) /
+                                  (1e-9 * static_cast<double>(m.t_ns - last_tracked_->t_ns));
+    }
+    if (!last_tracked_) last_tracked_.emplace();
+    last_tracked_->t_ns = m.t_ns;
+    last_tracked_->T_w_c = T_w_c;
+    lost_streak_ = 0;
+    return;
+  }
+  // A lost mono frame has no pose: its prediction has no scale to trust.
+  frames_.back().has_pose = false;
+  if (++lost_streak_ < options_.mono_reinit_after_lost_frames || !last_tracked_) return;
+  // Lost too long for the map to come back into view: a new map, continued from the old one
+  // (PlaceReinitializedMap). The old landmarks keep their positions (PnP recovery and loop
+  // closure can still use them); the window starts empty.
+  reinit_ = *last_tracked_;
+  ba_ = SlidingWindowBa(IntrinsicsOf(rig_), options_.ba);
+  for (const auto& [id, p_w] : map_points_) ba_.SetLandmarkPosition(id, p_w);
+  initializer_.emplace(rig_.left, options_.mono_init);
+  last_keyframe_observations_.clear();
+  lost_streak_ = 0;
+  out->note = "lost for " + std::to_string(options_.mono_reinit_after_lost_frames) +
+              " frames: re-initialising a new map";
+  VLOG(1) << "frame " << m.frame << ": " << out->note;
+}
+
 EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasurement& m) {
   const std::optional<MonoInitialization> init = initializer_->Add(m);
   EstimatorOutput out;
   if (!init) {
     frames_.push_back({m.t_ns, KeyframeId(), Pose::Identity(), /*has_pose=*/false});
-    out.initializing = true;
-    out.note = "initialising: " + initializer_->reason();
+    // A re-initialisation after a loss: these frames are lost (tracking failures), not the
+    // start of the run.
+    out.initializing = !reinit_.has_value();
+    out.note = std::string(reinit_ ? "lost, re-initialising: " : "initialising: ") +
+               initializer_->reason();
     return out;
   }
+  const bool reinitialised = reinit_.has_value();
   StartMonoMap(*init);
   initializer_.reset();
+  reinit_.reset();
   out.valid = true;
   out.T_w_c = T_w_prev_;
   ReportLandmarks(&out);
   std::ostringstream note;
   note.precision(3);
-  note << "initialised from frame " << init->reference.frame << " (" << init->p_ref.size()
+  note << (reinitialised ? "re-initialised (a new map placed at the extrapolated pose with the "
+                           "last speed: scale and heading across the gap are guesses) "
+                         : "initialised ")
+       << "from frame " << init->reference.frame << " (" << init->p_ref.size()
        << " points, " << TwoViewModelName(init->two_view.model) << ", median parallax "
        << init->two_view.median_parallax_deg << " deg)";
   out.note = note.str();
@@ -266,12 +305,29 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
   return out;
 }
 
+Sim3 SlidingWindowEstimator::PlaceReinitializedMap(const MonoInitialization& init) const {
+  // The reference camera at the last tracked pose moved on at the last velocity (world frame,
+  // per second), the heading kept; the new map's unit (the two-view baseline) is the distance
+  // the last speed covers between the two views.
+  const Reinit& r = *reinit_;
+  const double to_reference = 1e-9 * static_cast<double>(init.reference.t_ns - r.t_ns);
+  const double pair = 1e-9 * static_cast<double>(init.current.t_ns - init.reference.t_ns);
+  Sim3 S;
+  S.T = r.T_w_c;
+  S.T.translation() += r.velocity_w * to_reference;
+  S.scale = std::max(r.velocity_w.norm() * pair, 1e-6);
+  return S;
+}
+
 void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
   const size_t current_index = frames_.size();
   const size_t reference_index = current_index - init.between.size() - 1;
   CHECK_EQ(frames_.at(reference_index).t_ns, init.reference.t_ns);
-  const Pose T_w_cur = init.T_ref_cur;  // World = the reference camera.
-  for (const auto& [id, p_ref] : init.p_ref) ba_.SetLandmarkPosition(id, p_ref);
+  // World = the reference camera; after a loss, the map placed where the old one would be.
+  const Sim3 S_w_ref = reinit_ ? PlaceReinitializedMap(init) : Sim3();
+  const Pose T_w_ref = S_w_ref.T;
+  const Pose T_w_cur = (S_w_ref * Sim3{init.T_ref_cur, 1.0}).T;
+  for (const auto& [id, p_ref] : init.p_ref) ba_.SetLandmarkPosition(id, S_w_ref * p_ref);
   const auto make_keyframe = [&](const FrameMeasurement& f, const Pose& T_w_c) {
     BaKeyframe kf;
     kf.id = KeyframeId(num_keyframes_++);
@@ -287,7 +343,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
     keyframe_of_frame_[f.frame] = kf.id;
     return kf.id;
   };
-  const KeyframeId reference = make_keyframe(init.reference, Pose::Identity());
+  const KeyframeId reference = make_keyframe(init.reference, T_w_ref);
   const KeyframeId current = make_keyframe(init.current, T_w_cur);
   for (const auto& [id, p_ref] : init.p_ref) anchor_.emplace(id, reference);
   frames_[reference_index] = {init.reference.t_ns, reference, Pose::Identity(), true};
@@ -400,6 +456,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   if (!stereo && out.valid) velocity_ = T_w_prev_.inverse() * T_w_c;
   T_w_prev_ = T_w_c;
   out.T_w_c = T_w_c;
+  if (!stereo) NoteMonoTracking(m, out.valid, T_w_c, &out);
   return out;
 }
 

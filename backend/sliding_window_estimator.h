@@ -132,6 +132,9 @@ struct SlidingWindowEstimatorOptions {
   bool background_solve = true;  // see the class comment.
   MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
   uint64_t recovery_seed = 42;        // Of the mono PnP recovery's RANSAC.
+  // One camera: after this many lost frames in a row (PnP recovery failing too: the map is out
+  // of view), a new map is initialised and placed where the old one would continue.
+  int mono_reinit_after_lost_frames = 10;
 
   bool IsValid(std::string* why) const;
   // IsValid and what the rig adds (one camera: a gauge of at least two held keyframes).
@@ -170,6 +173,12 @@ class SlidingWindowEstimator : public Estimator {
   // frames between them.
   EstimatorOutput AddBeforeInitialization(const FrameMeasurement& m);
   void StartMonoMap(const MonoInitialization& init);
+  // Mono, after each tracked frame: the last tracked pose and velocity; after a lost one: no
+  // pose, and after mono_reinit_after_lost_frames of them a re-initialisation.
+  void NoteMonoTracking(const FrameMeasurement& m, bool valid, const Pose& T_w_c,
+                        EstimatorOutput* out);
+  // The new map's reference camera in the world after a re-initialisation (see the .cc).
+  Sim3 PlaceReinitializedMap(const MonoInitialization& init) const;
   // The initial guess of the current frame's pose (see the class comment).
   Pose PredictPose(const FrameMeasurement& m) const;
   // When pose-only tracking from the predicted pose fails, the pose from every observation
@@ -223,6 +232,14 @@ class SlidingWindowEstimator : public Estimator {
   // Mono: the initializer until the map exists, and every observation of the last keyframe
   // (the candidates for new landmarks at the next one).
   std::optional<MonoInitializer> initializer_;
+  struct Reinit {  // The last tracked frame: where a re-initialised map continues from.
+    int64_t t_ns = 0;
+    Pose T_w_c = Pose::Identity();
+    Eigen::Vector3d velocity_w = Eigen::Vector3d::Zero();  // World frame, per second.
+  };
+  std::optional<Reinit> last_tracked_;
+  std::optional<Reinit> reinit_;  // Set while re-initialising.
+  int lost_streak_ = 0;
   KeyframeId last_keyframe_;
   std::map<LandmarkId, BaObservation> last_keyframe_observations_;
   int num_keyframes_ = 0;

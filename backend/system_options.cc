@@ -156,6 +156,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "remove_outliers", &b.ba.remove_outliers);
   v->Field("ba", "min_observations", &b.ba.min_observations);
   v->Field("ba", "max_new_landmarks_per_keyframe", &b.max_new_landmarks_per_keyframe);
+  v->Field("ba", "mono_reinit_after_lost_frames", &b.mono_reinit_after_lost_frames);
   v->Field("ba", "estimate_disparity_offset", &b.ba.estimate_disparity_offset);
   v->Field("ba", "disparity_offset_prior_sigma_px", &b.ba.disparity_offset_prior_sigma_px);
   v->Field("ba", "max_landmark_depth_m", &b.max_landmark_depth_m);
