@@ -5,10 +5,10 @@
 #include <ceres/solver.h>
 #include <glog/logging.h>
 
-#include <Eigen/Cholesky>
 #include <chrono>
 
 #include "backend/ba/pose_block.h"
+#include "backend/ba/pose_graph_problem.h"
 #include "backend/ba/solver_time.h"
 
 namespace dala {
@@ -103,25 +103,11 @@ std::map<KeyframeId, Pose> OptimizePoseGraph(const std::map<KeyframeId, Pose>& T
   std::map<KeyframeId, PoseBlock> blocks;
   for (const auto& [id, T] : T_w_kf) blocks[id] = PoseToBlock(T);
   auto manifold = MakePoseManifold();
-  auto loss = MakeLoss(options.loss, options.loss_scale);
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  for (auto& [id, x] : blocks) problem.AddParameterBlock(x.data(), 7, manifold.get());
-  problem.SetParameterBlockConstant(blocks.begin()->second.data());
-  for (const PoseGraphEdge& e : edges) {
-    CHECK(blocks.count(e.from) && blocks.count(e.to))
-        << "pose-graph edge " << e.from << " -> " << e.to << " refers to an unknown keyframe";
-    // Upper-triangular square root U with U^T U = information.
-    Eigen::LLT<Matrix6d> llt(0.5 * (e.information + e.information.transpose()));
-    CHECK(llt.info() == Eigen::Success)
-        << "edge " << e.from << " -> " << e.to << ": information is not positive definite";
-    const Matrix6d sqrt_info = llt.matrixU();
-    problem.AddResidualBlock(RelativePoseError::Create(e.T_from_to, sqrt_info), loss.get(),
-                             blocks.at(e.from).data(), blocks.at(e.to).data());
-  }
-  SolvePoseGraphProblem(options, &problem, &s);
+  SolvePoseGraph(&blocks, manifold.get(), edges, options,
+                 [](const PoseGraphEdge& e, const Matrix6d& sqrt_info) {
+                   return RelativePoseError::Create(e.T_from_to, sqrt_info);
+                 },
+                 &s);
   if (!s.usable) return T_w_kf;
   std::map<KeyframeId, Pose> out;
   for (const auto& [id, x] : blocks) out[id] = BlockToPose(x);

@@ -6,12 +6,11 @@
 #include <ceres/problem.h>
 #include <glog/logging.h>
 
-#include <Eigen/Cholesky>
 #include <array>
 #include <cmath>
 #include <string>
 
-#include "backend/ba/ba_loss.h"
+#include "backend/ba/pose_graph_problem.h"
 
 namespace dala {
 namespace {
@@ -111,25 +110,11 @@ std::map<KeyframeId, Sim3> OptimizeSim3PoseGraph(const std::map<KeyframeId, Sim3
     blocks[id] = ToBlock(S);
   }
   ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<4>> manifold;
-  auto loss = MakeLoss(options.loss, options.loss_scale);
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  for (auto& [id, x] : blocks) problem.AddParameterBlock(x.data(), 8, &manifold);
-  problem.SetParameterBlockConstant(blocks.begin()->second.data());
-  for (const Sim3Edge& e : edges) {
-    CHECK(blocks.count(e.from) && blocks.count(e.to))
-        << "Sim(3) pose-graph edge " << e.from << " -> " << e.to << " refers to an unknown keyframe";
-    // Upper-triangular square root U with U^T U = information.
-    Eigen::LLT<Matrix7d> llt(0.5 * (e.information + e.information.transpose()));
-    CHECK(llt.info() == Eigen::Success)
-        << "edge " << e.from << " -> " << e.to << ": information is not positive definite";
-    const Matrix7d sqrt_info = llt.matrixU();
-    problem.AddResidualBlock(RelativeSim3Error::Create(e.S_from_to, sqrt_info), loss.get(),
-                             blocks.at(e.from).data(), blocks.at(e.to).data());
-  }
-  SolvePoseGraphProblem(options, &problem, &s);
+  SolvePoseGraph(&blocks, &manifold, edges, options,
+                 [](const Sim3Edge& e, const Matrix7d& sqrt_info) {
+                   return RelativeSim3Error::Create(e.S_from_to, sqrt_info);
+                 },
+                 &s);
   if (!s.usable) return S_w_kf;
   std::map<KeyframeId, Sim3> out;
   for (const auto& [id, x] : blocks) out[id] = FromBlock(x);
