@@ -45,7 +45,8 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
     return fail("ba.max_new_landmarks_per_keyframe must be >= 10");
   if (grid_cols < 1 || grid_rows < 1) return fail("ba.grid_cols and ba.grid_rows must be >= 1");
   if (max_landmark_depth_m <= 0) return fail("ba.max_landmark_depth_m must be > 0");
-  if (mono_reinit_after_lost_frames < 1) return fail("ba.mono_reinit_after_lost_frames must be >= 1");
+  if (mono_reinit_after_lost_frames < 1)
+    return fail("ba.mono_reinit_after_lost_frames must be >= 1");
   return mono_init.IsValid(why);
 }
 
@@ -147,7 +148,8 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
       // depth is d / (d + offset) of the frontend's (x and y scale with it).
       const double d = o->disparity();
       const double corrected = d + ba_.disparity_offset_px();
-      ba_.SetLandmarkPosition(o->landmark, T_w_c * ((corrected > 0 ? d / corrected : 1.0) * o->p_c0));
+      ba_.SetLandmarkPosition(o->landmark,
+                              T_w_c * ((corrected > 0 ? d / corrected : 1.0) * o->p_c0));
     } else {
       // Mono: the previous keyframe's view of it makes the pair the window triangulates.
       ba_.AddObservation(last_keyframe_, last_keyframe_observations_.at(o->landmark));

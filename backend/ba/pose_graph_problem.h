@@ -37,7 +37,8 @@ bool SolvePoseGraph(std::map<KeyframeId, std::array<double, kBlockSize>>* blocks
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  for (auto& [id, x] : *blocks) problem.AddParameterBlock(x.data(), static_cast<int>(kBlockSize), manifold);
+  for (auto& [id, x] : *blocks)
+    problem.AddParameterBlock(x.data(), static_cast<int>(kBlockSize), manifold);
   problem.SetParameterBlockConstant(blocks->begin()->second.data());
   for (const Edge& e : edges) {
     CHECK(blocks->count(e.from) && blocks->count(e.to))
