@@ -43,8 +43,8 @@ sim::SimOptions RoverStretch(int frames, uint32_t seed) {
   return sim;
 }
 
-// A 150-frame stretch of the rover loop (~37 m): every frame gets a pose, and the ATE is a
-// small fraction of the path (the target for the whole loop is 0.5 %).
+// A 150-frame stretch of the rover loop (~28 m): every frame gets a pose, and the ATE is a
+// small fraction of the path. Measured 0.099 % (deterministic); bound 1.5x that.
 TEST(SystemE2e, RoverStretchStereoBa) {
   const sim::SyntheticSequence seq(RoverStretch(150, 5));
   const SystemRun run = RunSystem(seq, SystemOptions());
@@ -54,7 +54,7 @@ TEST(SystemE2e, RoverStretchStereoBa) {
   const double fraction = run.eval.ate.translation.rmse / seq.PathLength();
   std::cout << "[ measured ] rover 150 frames, path " << seq.PathLength() << " m, ATE "
             << run.eval.ate.translation.rmse << " m (" << 100 * fraction << " %)" << std::endl;
-  EXPECT_LT(fraction, 0.005);
+  EXPECT_LT(fraction, 1.5 * 0.00099);
 }
 
 // The window solve in the background (default) and in the caller's thread give the same
@@ -93,7 +93,8 @@ TEST(SystemE2e, RoverStretchEkfStereoAndMono) {
     std::cout << "[ measured ] ekf/" << mode << " rover 100 frames, path " << seq.PathLength()
               << " m, ATE " << run.eval.ate.translation.rmse << " m (" << 100 * fraction
               << " %)" << std::endl;
-    EXPECT_LT(fraction, 0.003) << mode;
+    // Measured (deterministic): stereo 0.0507 %, mono 0.0369 %; bounds 1.5x.
+    EXPECT_LT(fraction, 1.5 * (options.mode == "stereo" ? 0.000507 : 0.000369)) << mode;
   }
 }
 

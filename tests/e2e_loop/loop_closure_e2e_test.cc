@@ -86,7 +86,7 @@ TEST(LoopClosureE2e, SmallLoopIsClosedAndAteDrops) {
   EXPECT_EQ(run.lost, 0);
   EXPECT_EQ(run.loops_closed, run.loops_detected);
   EXPECT_LT(closed, 0.7 * open);                            // Measured: 0.072 -> 0.032 m.
-  EXPECT_LT(run.eval.ate.translation.rmse / path, 0.0004);  // Measured: 0.024 %.
+  EXPECT_LT(run.eval.ate.translation.rmse / path, 1.5 * 0.00024);  // Measured: 0.024 %.
 }
 
 // One camera: the small loop (500 frames, ~124 m) from the left images. The revisit is
