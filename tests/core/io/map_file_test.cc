@@ -3,6 +3,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cstring>
 
 #include <fstream>
@@ -51,6 +56,59 @@ std::string ReadBytes(const std::string& path) {
 void WriteBytes(const std::string& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary) << bytes;
 }
+// Replaces the trailing FNV-1a hash with the one of the (modified) body, as WriteMapFile computes
+// it: a crafted file then gets past the checksum to the parser.
+std::string WithValidHash(std::string bytes) {
+  uint64_t hash = 0xcbf29ce484222325ull;
+  for (size_t i = 0; i + 8 < bytes.size(); ++i) {
+    hash ^= static_cast<unsigned char>(bytes[i]);
+    hash *= 0x100000001b3ull;
+  }
+  std::memcpy(&bytes[bytes.size() - 8], &hash, sizeof(hash));
+  return bytes;
+}
+
+// How ReadMapFile ended on a file, run in a child process whose address space may grow by at
+// most 256 MB: a crash or an unbounded allocation (std::bad_alloc, std::length_error) cannot
+// take the test binary down, and is told apart from a clean dala::Error.
+enum class ReadOutcome { kLoaded, kDalaError, kOtherException, kCrashed };
+const char* Name(ReadOutcome o) {
+  switch (o) {
+    case ReadOutcome::kLoaded: return "loaded";
+    case ReadOutcome::kDalaError: return "dala::Error";
+    case ReadOutcome::kOtherException: return "another exception (bad_alloc, length_error...)";
+    case ReadOutcome::kCrashed: return "crashed";
+  }
+  return "?";
+}
+ReadOutcome ReadInChild(const std::string& path) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+#if !defined(__SANITIZE_ADDRESS__)  // ASan reserves terabytes of address space up front.
+    long pages = 0;
+    std::ifstream("/proc/self/statm") >> pages;
+    const rlim_t cap = static_cast<rlim_t>(pages) * sysconf(_SC_PAGESIZE) + (256u << 20);
+    const rlimit limit{cap, cap};
+    setrlimit(RLIMIT_AS, &limit);
+#endif
+    int code = 0;
+    try {
+      ReadMapFile(path);
+    } catch (const Error&) {
+      code = 1;
+    } catch (...) {
+      code = 2;
+    }
+    _exit(code);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status)) return ReadOutcome::kCrashed;
+  const ReadOutcome outcomes[] = {ReadOutcome::kLoaded, ReadOutcome::kDalaError,
+                                  ReadOutcome::kOtherException};
+  return WEXITSTATUS(status) <= 2 ? outcomes[WEXITSTATUS(status)] : ReadOutcome::kCrashed;
+}
+
 std::string ReadError(const std::string& path) {
   try {
     ReadMapFile(path);
@@ -131,14 +189,66 @@ TEST(MapFileTest, HugeDescriptorSizeWithAValidChecksumIsAClearError) {
   WriteMapFile(dir / "m.dmap", MakeMap(121));
   std::string bytes = ReadBytes(dir / "m.dmap");
   for (size_t i = 12; i < 16; ++i) bytes[i] = static_cast<char>(0xFF);  // After magic, version.
-  uint64_t hash = 0xcbf29ce484222325ull;  // FNV-1a of the body, as the writer computes it.
-  for (size_t i = 0; i + 8 < bytes.size(); ++i) {
-    hash ^= static_cast<unsigned char>(bytes[i]);
-    hash *= 0x100000001b3ull;
-  }
-  std::memcpy(&bytes[bytes.size() - 8], &hash, sizeof(hash));
-  WriteBytes(dir / "crafted.dmap", bytes);
+  WriteBytes(dir / "crafted.dmap", WithValidHash(bytes));
   EXPECT_THAT(ReadError(dir / "crafted.dmap"), HasSubstr("implausible descriptor size 4294967295"));
+}
+
+// A map from a stranger, cut at every 1/16 of its length: a dala::Error each time, in a child
+// process whose memory is capped (never a crash or a large allocation).
+TEST(MapFileTest, FileCutAtEverySixteenthIsAnError) {
+  testing::TempDir dir;
+  WriteMapFile(dir / "m.dmap", MakeMap(121));
+  const std::string good = ReadBytes(dir / "m.dmap");
+  for (size_t k = 0; k < 16; ++k) {
+    const size_t cut = good.size() * k / 16;
+    WriteBytes(dir / "cut.dmap", good.substr(0, cut));
+    EXPECT_EQ(ReadInChild(dir / "cut.dmap"), ReadOutcome::kDalaError)
+        << "cut at " << cut << " of " << good.size() << " bytes";
+    // The same cut with a checksum that matches what is left: still refused, as truncated.
+    if (cut >= 24) {
+      WriteBytes(dir / "cut.dmap", WithValidHash(good.substr(0, cut)));
+      EXPECT_THAT(ReadError(dir / "cut.dmap"), HasSubstr("corrupted")) << "cut at " << cut;
+      EXPECT_EQ(ReadInChild(dir / "cut.dmap"), ReadOutcome::kDalaError) << "cut at " << cut;
+    }
+  }
+}
+
+// Flipped bytes: refused by the checksum; with the checksum made valid again, the parser either
+// loads the map (a flipped coordinate or descriptor value is still a map) or refuses it with a
+// dala::Error; a flipped count or size is always refused. Never a crash or a large allocation.
+TEST(MapFileTest, FlippedBytesNeverCrashOrAllocateWithoutBound) {
+  testing::TempDir dir;
+  WriteMapFile(dir / "m.dmap", MakeMap(121));
+  const std::string good = ReadBytes(dir / "m.dmap");
+  std::vector<size_t> positions;
+  for (size_t k = 0; k < 16; ++k) positions.push_back(good.size() * k / 16);
+  // The counts and sizes: descriptor size, keyframe count, the first keyframe's point count
+  // (after its ids and pose), the landmark count (4 landmarks of 36 bytes before the hash).
+  const size_t first_points = 8 + 4 + 4 + 8 + 8 + 8 + 56;
+  const size_t landmarks = good.size() - 8 - 4 * 36 - 8;
+  const std::vector<size_t> counts = {12, 15, 16, 20, 23, first_points, first_points + 7,
+                                      landmarks, landmarks + 7};
+  positions.insert(positions.end(), counts.begin(), counts.end());
+  for (size_t pos : positions) {
+    for (unsigned char mask : {0x01, 0x80, 0xFF}) {
+      std::string flipped = good;
+      flipped[pos] = static_cast<char>(flipped[pos] ^ mask);
+      WriteBytes(dir / "f.dmap", flipped);
+      EXPECT_THAT(ReadError(dir / "f.dmap"), ::testing::AnyOf(HasSubstr("hash mismatch"),
+                                                              HasSubstr("not a dala map"),
+                                                              HasSubstr("version")))
+          << "byte " << pos << " ^ " << int{mask};
+      WriteBytes(dir / "f.dmap", WithValidHash(flipped));
+      const ReadOutcome outcome = ReadInChild(dir / "f.dmap");
+      const bool is_count = std::find(counts.begin(), counts.end(), pos) != counts.end();
+      if (is_count) {
+        EXPECT_EQ(outcome, ReadOutcome::kDalaError) << "count byte " << pos << " ^ " << int{mask};
+      } else {
+        EXPECT_TRUE(outcome == ReadOutcome::kLoaded || outcome == ReadOutcome::kDalaError)
+            << "byte " << pos << " ^ " << int{mask} << ": " << Name(outcome);
+      }
+    }
+  }
 }
 
 TEST(MapFileTest, DescriptorSizeMismatchIsRefusedAndWritesNothing) {
