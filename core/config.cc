@@ -223,6 +223,11 @@ ConfigNode ParseConfigString(const std::string& yaml, const std::string& name) {
         text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw Error() << name << ": not valid YAML (" << e.err << ")";
+  } catch (const std::exception& e) {
+    // OpenCV's parser has bugs of its own: an empty key in a flow map ("{a: 1, : 2}") ends in
+    // std::length_error. Whatever it throws, the file is what the user must fix.
+    throw Error() << name << ": not valid YAML (OpenCV's parser failed: " << e.what()
+                  << "); check the file's syntax, e.g. an empty key";
   }
   if (!shared->storage.isOpened()) throw Error() << name << ": cannot parse as YAML";
   return CheckedRoot(ConfigNode(shared, shared->storage.root(), ""));
