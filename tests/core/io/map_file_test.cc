@@ -251,6 +251,31 @@ TEST(MapFileTest, FlippedBytesNeverCrashOrAllocateWithoutBound) {
   }
 }
 
+// Every count and size field set to extreme values, with a valid checksum: a dala::Error, never
+// a std::length_error or a multi-GB allocation (0xFFFFFFFF as a descriptor size used to pass the
+// size check as int -1 and abort in std::vector::resize).
+TEST(MapFileTest, ExtremeCountsWithAValidChecksumAreErrors) {
+  testing::TempDir dir;
+  WriteMapFile(dir / "m.dmap", MakeMap(121));
+  const std::string good = ReadBytes(dir / "m.dmap");
+  const size_t first_points = 8 + 4 + 4 + 8 + 8 + 8 + 56;
+  const size_t landmarks = good.size() - 8 - 4 * 36 - 8;
+  struct Field {
+    size_t offset, size;
+  };
+  for (const Field f : {Field{12, 4}, Field{16, 8}, Field{first_points, 8}, Field{landmarks, 8}}) {
+    for (const uint64_t value : {~0ull, 1ull << 63, (1ull << 31) - 1, 1ull << 31, 1ull << 32,
+                                 0x1000000ull}) {
+      std::string crafted = good;
+      std::memcpy(&crafted[f.offset], &value, f.size);  // Little-endian: the low bytes.
+      WriteBytes(dir / "c.dmap", WithValidHash(crafted));
+      const ReadOutcome outcome = ReadInChild(dir / "c.dmap");
+      EXPECT_EQ(outcome, ReadOutcome::kDalaError)
+          << "field at byte " << f.offset << " = " << value << ": " << Name(outcome);
+    }
+  }
+}
+
 TEST(MapFileTest, DescriptorSizeMismatchIsRefusedAndWritesNothing) {
   testing::TempDir dir;
   SavedMap map = MakeMap(121);
