@@ -252,7 +252,9 @@ void SlidingWindowEstimator::NoteMonoTracking(const FrameMeasurement& m, bool va
       last_tracked_->velocity_w = (T_w_c.translation() - last_tracked_->T_w_c.translation()) /
                                   (1e-9 * static_cast<double>(m.t_ns - last_tracked_->t_ns));
     }
-    if (!last_tracked_) last_tracked_.emplace();
+    // Not emplace(): clang cannot default-construct a nested struct with member initializers
+    // inside std::optional while the enclosing class is incomplete (its DALA_FUZZ build).
+    if (!last_tracked_) last_tracked_ = Reinit();
     last_tracked_->t_ns = m.t_ns;
     last_tracked_->T_w_c = T_w_c;
     lost_streak_ = 0;
