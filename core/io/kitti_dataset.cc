@@ -56,7 +56,8 @@ StereoRig RigFromCalib(const std::string& calib_path, bool stereo) {
     }
     rig.baseline = -(*P1)(0, 3) / (*P1)(0, 0);
     if (!(rig.baseline > 0)) {
-      throw Error() << calib_path << ": P1 gives baseline " << rig.baseline
+      // P1(0,3) = 0 gives -0: print it as 0.
+      throw Error() << calib_path << ": P1 gives baseline " << rig.baseline + 0.0
                     << " m; expected > 0 (P1(0,3) = -fx * baseline, right camera at +x)";
     }
   }

@@ -182,6 +182,13 @@ TEST(KittiDataset, ErrorsNameTheFileAndTheFix) {
                 HasSubstr("P1(0,0) = 0 is not a focal length"));
   }
   {
+    // Zero baseline (P1 = P0): refused, not run as a stereo rig with infinite depths.
+    const std::string seq = fresh("zero_baseline");
+    WriteText(seq + "/calib.txt",
+              "P0: 1 0 0 0 0 1 0 0 0 0 1 0\nP1: 1 0 0 0 0 1 0 0 0 0 1 0\n");
+    EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("P1 gives baseline 0 m"));
+  }
+  {
     const std::string seq = fresh("no_p1");
     WriteText(seq + "/calib.txt", "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n");
     EXPECT_THAT(ErrorOf([&] { OpenDataset(seq); }), HasSubstr("no 'P1:' row"));
