@@ -202,11 +202,10 @@ class SlidingWindowEstimator : public Estimator {
   // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame
   // is not a keyframe or the solve fails.
   bool CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
-  // One camera (m.loop): the same over Sim(3) (backend/ba/sim3_pose_graph.h), the loop edge from
-  // the similarity of the recognised landmarks' two estimates, or, when too few are mapped on
-  // both sides, from the PnP pose of m on the old landmarks with a free scale; *T_w_c is the
-  // keyframe's tracked pose. Frames between keyframes and the velocity are rescaled with their
-  // keyframe.
+  // One camera (m.loop, *T_w_c tracked): the same over Sim(3) (backend/ba/sim3_pose_graph.h);
+  // the loop edge places the keyframe by PnP of m on the old landmarks (else by the similarity)
+  // with the scale of the recognised landmarks' two estimates (else left to the graph). Frames
+  // between keyframes are rescaled with their keyframe; the previous frame's pose follows.
   bool CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id, Pose* T_w_c);
   // Optimises the window with the new keyframe `id` and records the new estimates
   // (keyframe_poses_, map_points_). Runs on solver_ when options_.background_solve.

@@ -200,7 +200,7 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   for (const auto& [id, S] : corrected) T_w_kf[id] = S.T;
   for (auto& [id, pose] : keyframe_poses_) pose = T_w_kf.at(id);
   ba_.ApplyCorrection(T_w_kf);
-  velocity_.translation() *= corrected.at(cur_id).scale;
+  // The previous frame's corrected pose: Add derives the velocity from it and *T_w_c.
   if (!frames_.empty() && frames_.back().has_pose) {
     T_w_prev_ = KeyframePoseNow(frames_.back().reference) * frames_.back().T_kf_c;
   }
