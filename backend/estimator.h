@@ -65,6 +65,12 @@ class Estimator {
 
   // The current map.
   virtual std::vector<MapPoint> map() const = 0;
+
+  // Starts in a saved map (before the first measurement): its landmarks (world points, ids
+  // unique in the run) are the map every frame is placed in until one is (by PnP on the
+  // landmarks the frontend recognised: frames before that get no pose); the run then goes on
+  // in the map's frame and unit. False: this estimator cannot (the caller says so).
+  virtual bool UseMap(const std::vector<MapPoint>& /*landmarks*/) { return false; }
 };
 
 }  // namespace dala

@@ -266,11 +266,10 @@ void SlidingWindowEstimator::NoteMonoTracking(const FrameMeasurement& m, bool va
   // Lost too long for the map to come back into view: a new map, continued from the old one
   // (PlaceReinitializedMap). The old landmarks keep their positions (PnP recovery and loop
   // closure can still use them); the window starts empty.
+  // The old window stays until the new map starts (StartMonoMap), so that a frame that
+  // relocalises in the old map first (ResumeOldMap) continues in it.
   reinit_ = *last_tracked_;
-  ba_ = SlidingWindowBa(IntrinsicsOf(rig_), options_.ba);
-  for (const auto& [id, p_w] : map_points_) ba_.SetLandmarkPosition(id, p_w);
   initializer_.emplace(rig_.left, options_.mono_init);
-  last_keyframe_observations_.clear();
   lost_streak_ = 0;
   out->note = "lost for " + std::to_string(options_.mono_reinit_after_lost_frames) +
               " frames: re-initialising a new map";
@@ -283,13 +282,24 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
   if (!init) {
     frames_.push_back({m.t_ns, KeyframeId(), Pose::Identity(), /*has_pose=*/false});
     // A re-initialisation after a loss: these frames are lost (tracking failures), not the
-    // start of the run.
+    // start of the run; the old map is still handed over, so that the frontend keeps trying to
+    // relocalise in it.
     out.initializing = !reinit_.has_value();
     out.note = std::string(reinit_ ? "lost, re-initialising: " : "initialising: ") +
                initializer_->reason();
+    if (reinit_) {
+      out.T_w_c = T_w_prev_;
+      ReportLandmarks(&out);
+    }
     return out;
   }
   const bool reinitialised = reinit_.has_value();
+  if (reinitialised) {
+    // The new map starts in a window of its own; the old landmarks keep their positions (PnP
+    // recovery and loop closure can still use them).
+    RestartWindow();
+    last_keyframe_observations_.clear();
+  }
   StartMonoMap(*init);
   initializer_.reset();
   reinit_.reset();
@@ -387,28 +397,82 @@ void SlidingWindowEstimator::RememberLastKeyframe(KeyframeId id, const FrameMeas
   }
 }
 
+void SlidingWindowEstimator::RestartWindow() {
+  WaitForWindowSolve();
+  ba_ = SlidingWindowBa(IntrinsicsOf(rig_, ba_.disparity_offset_px()), options_.ba);
+  for (const auto& [id, p_w] : map_points_) ba_.SetLandmarkPosition(id, p_w);
+}
+
+std::optional<Pose> SlidingWindowEstimator::ResumeOldMap(const FrameMeasurement& m) {
+  std::optional<Pose> T_w_c = RecoverPose(m);
+  if (!T_w_c) return std::nullopt;
+  initializer_.reset();
+  reinit_.reset();
+  VLOG(1) << "frame " << m.frame << ": relocalised in the old map; the re-initialisation stops";
+  return T_w_c;
+}
+
+bool SlidingWindowEstimator::OutsideWindow(const FrameMeasurement& m) const {
+  // The window's landmarks seen by m against the older ones (positions outside the window).
+  const std::map<LandmarkId, Eigen::Vector3d> window = ba_.Landmarks();
+  int inside = 0, outside = 0;
+  for (const FeatureObservation& o : m.observations) {
+    if (window.count(o.landmark)) {
+      ++inside;
+    } else if (ba_.LandmarkPosition(o.landmark) &&
+               !unconfirmed_loop_landmarks_.count(o.landmark)) {
+      ++outside;
+    }
+  }
+  const int enough = 2 * options_.pose_only.min_inliers;
+  return inside < enough && outside >= enough;
+}
+
 EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   WaitForWindowSolve();
   if (solved_in_background_) {
     T_w_prev_ = keyframe_poses_.at(*solved_in_background_);
     solved_in_background_.reset();
   }
+  // Lost for long (mono): a frame that relocalises in the old map resumes it; else the new
+  // map's initialisation goes on.
+  std::optional<Pose> resumed;
+  if (initializer_ && reinit_) resumed = ResumeOldMap(m);
+  // In a saved map (UseMap): the first frame placed in it starts the run there.
+  std::optional<Pose> T_w_start;
+  if (awaiting_map_) {
+    T_w_start = RecoverPose(m);
+    if (!T_w_start) {
+      frames_.push_back({m.t_ns, KeyframeId(), Pose::Identity(), /*has_pose=*/false});
+      EstimatorOutput out;
+      out.initializing = true;
+      out.note = "localising in the saved map: no mapped place recognised yet";
+      return out;
+    }
+    awaiting_map_ = false;
+    initializer_.reset();
+  }
   if (initializer_) return AddBeforeInitialization(m);
   const bool stereo = rig_.is_stereo();
   EstimatorOutput out;
   // Initial guess: the previous estimate moved by the visual motion (or the last velocity).
-  const bool first = frames_.empty();  // Stereo only: mono starts in AddBeforeInitialization.
+  // The first keyframe: stereo's first frame, or the first frame placed in a saved map (mono
+  // starts in AddBeforeInitialization otherwise).
+  const bool first = num_keyframes_ == 0;
   if (stereo && !first && m.motion) velocity_ = m.motion->T_prev_cur;
-  Pose T_w_c = first ? Pose::Identity() : PredictPose(m);
-  out.valid = stereo && (first || m.motion.has_value());
+  Pose T_w_c = first ? T_w_start.value_or(Pose::Identity()) : PredictPose(m);
+  out.valid = first || (stereo && m.motion.has_value());
+  if (T_w_start) out.note = "localised in the saved map";
 
   if (!first) {
     if (stereo && m.is_keyframe && m.loop && options_.loop.enable) {
       out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
     }
-    // Pose-only tracking against the window (a keyframe: before it joins the window).
+    // Pose-only tracking against the window (a keyframe: before it joins the window); a frame
+    // that resumed the old map has its pose already.
     const std::vector<BaObservation> mapped = WindowObservations(m);
-    const PoseOnlyResult r = ba_.TrackFrame(mapped, T_w_c, options_.pose_only);
+    const PoseOnlyResult r = resumed ? PoseOnlyResult()
+                                     : ba_.TrackFrame(mapped, T_w_c, options_.pose_only);
     VLOG(r.status == PoseOnlyStatus::kOk ? 2 : 1)
         << "frame " << m.frame << ": pose-only " << PoseOnlyStatusName(r.status) << ", "
         << r.num_inliers << " inliers of " << mapped.size() << " observations of mapped landmarks";
@@ -418,9 +482,10 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     }
   }
   if (!out.valid && !first) {
-    if (const std::optional<Pose> recovered = RecoverPose(m)) {
+    if (const std::optional<Pose> recovered = resumed ? resumed : RecoverPose(m)) {
       T_w_c = *recovered;
       out.valid = true;
+      relocalised_ = true;
     }
   }
   // One camera: the loop closes from the tracked pose (the similarity moves it).
@@ -433,7 +498,20 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     }
   }
   // A mono keyframe needs a tracked pose (see the class comment).
-  if (first || (m.is_keyframe && (stereo || out.valid))) {
+  const bool new_keyframe = first || (m.is_keyframe && (stereo || out.valid));
+  if (new_keyframe && out.valid && relocalised_) {
+    // The first keyframe after a relocalisation: placed by the old landmarks it sees again
+    // (RecoverPose). When those lie outside the window (a place mapped long ago, found by the
+    // place recognition after a long loss), nothing links the keyframe to the window's
+    // keyframes: the window starts again from it, held as the gauge at its relocalised pose.
+    relocalised_ = false;
+    if (OutsideWindow(m)) {
+      RestartWindow();
+      out.note = "relocalised in the map (a place seen before); the window starts again here";
+      VLOG(1) << "frame " << m.frame << ": " << out.note;
+    }
+  }
+  if (new_keyframe) {
     BaKeyframe kf;
     kf.id = KeyframeId(num_keyframes_++);
     kf.t_ns = m.t_ns;
@@ -457,10 +535,16 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     frames_.push_back({m.t_ns, ref, KeyframePoseNow(ref).inverse() * T_w_c});
     ReportLandmarks(&out);
   }
-  if (!stereo && out.valid) velocity_ = T_w_prev_.inverse() * T_w_c;
+  // After lost frames T_w_prev_ is a guess: the last tracked velocity is kept.
+  if (!stereo && out.valid && !resumed && !first) {
+    velocity_ = T_w_prev_.inverse() * T_w_c;
+  }
   T_w_prev_ = T_w_c;
   out.T_w_c = T_w_c;
   if (!stereo) NoteMonoTracking(m, out.valid, T_w_c, &out);
+  // A lost stereo frame has no pose either: it would be an extrapolation (a lost keyframe still
+  // joins the window at that guess, to carry the stereo landmarks it starts).
+  if (stereo && !out.valid) frames_.back().has_pose = false;
   return out;
 }
 
@@ -472,6 +556,18 @@ Trajectory SlidingWindowEstimator::trajectory() const {
     if (f.has_pose) t.Add(f.t_ns, KeyframePoseNow(f.reference) * f.T_kf_c);
   }
   return t;
+}
+
+bool SlidingWindowEstimator::UseMap(const std::vector<MapPoint>& landmarks) {
+  CHECK(frames_.empty()) << "UseMap before the first frame";
+  for (const MapPoint& p : landmarks) {
+    ba_.SetLandmarkPosition(p.id, p.p_w);
+    map_points_[p.id] = p.p_w;
+    // Known landmarks: a keyframe that sees one takes the observation (SelectKeyframeObservations).
+    landmark_observations_[p.id] = std::max(p.observations, 1);
+  }
+  awaiting_map_ = true;
+  return true;
 }
 
 std::vector<MapPoint> SlidingWindowEstimator::map() const {

@@ -152,6 +152,7 @@ class SlidingWindowEstimator : public Estimator {
   EstimatorOutput Add(const FrameMeasurement& measurement) override;
   Trajectory trajectory() const override;
   std::vector<MapPoint> map() const override;
+  bool UseMap(const std::vector<MapPoint>& landmarks) override;
 
   const SlidingWindowBa& ba() const {
     WaitForWindowSolve();
@@ -167,7 +168,7 @@ class SlidingWindowEstimator : public Estimator {
     int64_t t_ns = 0;
     KeyframeId reference;
     Pose T_kf_c = Pose::Identity();
-    bool has_pose = true;  // false: before the mono initialisation (left out of trajectory()).
+    bool has_pose = true;  // false: lost, or before the mono initialisation (not in trajectory()).
   };
   // Mono: feeds the initializer; on success builds the first two keyframes and localises the
   // frames between them.
@@ -207,6 +208,17 @@ class SlidingWindowEstimator : public Estimator {
   // with the scale of the recognised landmarks' two estimates (else left to the graph). Frames
   // between keyframes are rescaled with their keyframe; the previous frame's pose follows.
   bool CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id, Pose* T_w_c);
+  // A new, empty window (no marginalisation prior); every landmark keeps its last position
+  // (PnP recovery, loop closure and the next keyframes use them), the disparity offset its
+  // estimate.
+  void RestartWindow();
+  // Mono, re-initialising after a long loss: the pose of m by PnP on the old map's landmarks
+  // (the frontend relocalised it); on success the re-initialisation stops and the old map goes
+  // on. nullopt: not relocalised.
+  std::optional<Pose> ResumeOldMap(const FrameMeasurement& m);
+  // m sees too few of the window's landmarks and enough older ones: relocalised at a place the
+  // window does not hold.
+  bool OutsideWindow(const FrameMeasurement& m) const;
   // Optimises the window with the new keyframe `id` and records the new estimates
   // (keyframe_poses_, map_points_). Runs on solver_ when options_.background_solve.
   void SolveWindow(KeyframeId id);
@@ -239,6 +251,10 @@ class SlidingWindowEstimator : public Estimator {
   std::optional<Reinit> last_tracked_;
   std::optional<Reinit> reinit_;  // Set while re-initialising.
   int lost_streak_ = 0;
+  // A frame was placed by RecoverPose since the last keyframe (see Add).
+  bool relocalised_ = false;
+  // UseMap: no frame placed in the saved map yet.
+  bool awaiting_map_ = false;
   KeyframeId last_keyframe_;
   std::map<LandmarkId, BaObservation> last_keyframe_observations_;
   int num_keyframes_ = 0;

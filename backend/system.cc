@@ -78,8 +78,11 @@ TrackResult System::Track(const Frame& frame) {
   EstimatorOutput e = estimator_->Add(m);
   const LocalMapSearchOptions& search = options_.frontend.local_map;
   // Stereo runs get it too, for the relocalisation after a lost frame; their guided search and
-  // keyframe evidence use it only with local_map.stereo (frontend.h).
-  if (!e.local_map.empty() && search.enable) {
+  // keyframe evidence use it only with local_map.stereo (frontend.h). A lost frame is handed
+  // over even with an empty map (a window of lost keyframes holds no landmark), so that the
+  // frontend knows to relocalise; estimators that never hand a map (the EKFs) are left alone.
+  if (search.enable && (!e.local_map.empty() || (!e.valid && local_map_handed_))) {
+    local_map_handed_ = true;
     frontend_->SetLocalMap({frame.id, e.T_w_c, e.valid, std::move(e.local_map)});
   }
   const auto t2 = Clock::now();
@@ -102,7 +105,7 @@ TrackResult System::Track(const Frame& frame) {
   stats_.push_back(s);
   // A mono keyframe the estimator could not place is no keyframe of the map (it has a guessed
   // pose); a stereo one always joins the window.
-  if (m.is_keyframe && (e.valid || rig_.is_stereo())) RecordKeyframe();
+  if (m.is_keyframe && (e.valid || rig_.is_stereo())) RecordKeyframe(frame.left);
 
   TrackResult r;
   r.status = s.status;
@@ -123,8 +126,13 @@ void System::SkipFrame(FrameId frame, int64_t t_ns, const std::string& note) {
   stats_.push_back(s);
 }
 
-void System::RecordKeyframe() {
+void System::RecordKeyframe(const cv::Mat& left) {
   SavedKeyframe record;
+  // The place recognition's thumbnail: what ranks this keyframe when a run relocalises in the
+  // saved map.
+  const cv::Mat thumbnail = PlaceRecognition::GlobalDescriptor(left, options_.frontend.loop);
+  CHECK(thumbnail.isContinuous());
+  record.thumbnail.assign(thumbnail.ptr<float>(), thumbnail.ptr<float>() + thumbnail.total());
   const DetectedImage* detection = frontend_->keyframe_detection();
   const std::vector<LandmarkId>* landmarks = frontend_->keyframe_landmarks();
   if (detection != nullptr && landmarks != nullptr) {
@@ -137,6 +145,8 @@ void System::RecordKeyframe() {
       saved.uv = p.uv;
       saved.orientation = p.orientation;
       saved.scale = p.scale;
+      saved.lambda1 = p.lambda1;
+      saved.lambda2 = p.lambda2;
       const float* row = detection->descriptors.ptr<float>(static_cast<int>(i));
       saved.descriptor.assign(row, row + n);
       record.points.push_back(std::move(saved));
@@ -174,6 +184,9 @@ std::vector<SavedKeyframe> System::keyframes() const {
 
 std::string System::ScaleDescription() const {
   if (options_.mode == "stereo") return "metric (stereo)";
+  if (saved_map_metric_) {
+    return *saved_map_metric_ ? "metric (the saved map's)" : "arbitrary (the saved map's unit)";
+  }
   // The mono EKF prefers the odometry to the stereo motion (backend/ekf/mono_ekf.h).
   if (options_.estimator == "ekf" && odometry_given_) return "metric (odometry)";
   if (options_.mono_stereo_motion) return "metric (stereo visual motion)";
@@ -182,10 +195,14 @@ std::string System::ScaleDescription() const {
 
 namespace {
 
-// The map without its keyframes: landmarks and the descriptor size.
+// The map without its keyframes: landmarks, the descriptor and thumbnail sizes, the unit.
 SavedMap MapWithoutKeyframes(const std::vector<SavedKeyframe>& keyframes,
-                             const std::vector<MapPoint>& points) {
+                             const std::vector<MapPoint>& points, const SystemOptions& options,
+                             bool metric) {
   SavedMap map;
+  map.metric = metric;
+  map.thumbnail_width = options.frontend.loop.thumbnail_width;
+  map.thumbnail_height = options.frontend.loop.thumbnail_height;
   for (const SavedKeyframe& kf : keyframes) {
     if (!kf.points.empty()) map.descriptor_size = static_cast<int>(kf.points[0].descriptor.size());
   }
@@ -196,14 +213,16 @@ SavedMap MapWithoutKeyframes(const std::vector<SavedKeyframe>& keyframes,
 }  // namespace
 
 SavedMap System::MapSnapshot() const {
-  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map());
+  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map(), options_,
+                                     ScaleDescription().rfind("metric", 0) == 0);
   map.keyframes = keyframes();
   return map;
 }
 
 void System::SaveMap(const std::string& path) const {
   RefreshKeyframePoses();
-  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map());
+  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map(), options_,
+                                     ScaleDescription().rfind("metric", 0) == 0);
   if (std::count(keyframe_has_pose_.begin(), keyframe_has_pose_.end(), false) > 0) {
     // Some keyframes have no pose (mono before its initialisation): write a copy without them.
     map.keyframes = keyframes();
@@ -222,5 +241,54 @@ void System::SaveMap(const std::string& path) const {
 }
 
 SavedMap System::LoadMap(const std::string& path) { return ReadMapFile(path); }
+
+void System::UseMap(const SavedMap& map) {
+  if (!stats_.empty()) throw Error() << "a saved map must be given before the first frame";
+  if (map.keyframes.empty() || map.landmarks.empty()) {
+    throw Error() << "the saved map has no keyframes or no landmarks: nothing to relocalise in";
+  }
+  if (rig_.is_stereo() && !map.metric) {
+    throw Error() << "the saved map was made from one camera (its unit is arbitrary): a stereo "
+                     "run cannot continue it; run with --mode mono";
+  }
+  const FrontendOptions& f = options_.frontend;
+  if (!f.loop.enable || !f.loop.relocalise) {
+    throw Error() << "running in a saved map needs the place recognition and the relocalisation "
+                     "(loop.enable=1, loop.relocalise=1)";
+  }
+  if (map.descriptor_size != f.harris.patch_size * f.harris.patch_size) {
+    throw Error() << "the saved map's descriptors have " << map.descriptor_size
+                  << " values, these options' " << f.harris.patch_size * f.harris.patch_size
+                  << " (harris.patch_size " << f.harris.patch_size
+                  << "): run with the options that made the map";
+  }
+  if (map.thumbnail_width != f.loop.thumbnail_width ||
+      map.thumbnail_height != f.loop.thumbnail_height) {
+    throw Error() << "the saved map's thumbnails are " << map.thumbnail_width << "x"
+                  << map.thumbnail_height << ", these options' " << f.loop.thumbnail_width << "x"
+                  << f.loop.thumbnail_height
+                  << " (loop.thumbnail_width/height): run with the options that made the map";
+  }
+  for (size_t k = 1; k < map.keyframes.size(); ++k) {
+    if (!(map.keyframes[k - 1].frame < map.keyframes[k].frame)) {
+      throw Error() << "the saved map's keyframes are not in frame order (frame "
+                    << map.keyframes[k].frame << " after " << map.keyframes[k - 1].frame << ")";
+    }
+  }
+  std::vector<MapPoint> landmarks;
+  for (const SavedLandmark& l : map.landmarks) {
+    if (!l.id.valid() || !l.p_w.allFinite()) {
+      throw Error() << "the saved map has a landmark with id " << l.id.value
+                    << " at a non-finite position or with an invalid id";
+    }
+    landmarks.push_back({l.id, l.p_w, l.observations});
+  }
+  if (!estimator_->UseMap(landmarks)) {
+    throw Error() << "the estimator " << options_.estimator << "/" << options_.mode
+                  << " cannot start in a saved map; use --estimator ba";
+  }
+  frontend_->UseMap(map);
+  saved_map_metric_ = map.metric;
+}
 
 }  // namespace dala

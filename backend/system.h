@@ -91,9 +91,17 @@ class System {
   SavedMap MapSnapshot() const;
   void SaveMap(const std::string& path) const;
   // Reads a map written by SaveMap (dala::Error on a missing, foreign, corrupted or other-version
-  // file). The map is returned for use (inspection, relocalisation by the caller); a System does
-  // not yet continue tracking inside a loaded map.
+  // file). The map is returned for use (inspection, or UseMap to run in it).
   static SavedMap LoadMap(const std::string& path);
+  // Starts this run in a saved map (call before the first Track; `dala run --map FILE`): every
+  // frame is relocalised against the map's keyframes (place recognition, then PnP on its
+  // landmarks) until one is placed; frames before have no pose (note "localising in the saved
+  // map ..."); the run then goes on in the map's frame and unit, adding its own keyframes and
+  // landmarks (SaveMap writes the run's keyframes and every landmark). Throws dala::Error when
+  // the map does not suit the run (a stereo run in a one-camera map, other descriptor or
+  // thumbnail sizes, relocalisation off, an estimator that cannot, a malformed map). The BA
+  // estimator only.
+  void UseMap(const SavedMap& map);
   const SystemOptions& options() const { return options_; }
   // What fixes the map's unit: "metric (stereo)", "metric (odometry)" (the mono EKF fed by the
   // dataset's odometry), "metric (stereo visual motion)" (the mono EKF fed by the stereo motion)
@@ -103,7 +111,7 @@ class System {
   const Estimator& estimator() const { return *estimator_; }
 
  private:
-  void RecordKeyframe();
+  void RecordKeyframe(const cv::Mat& left);
 
   StereoRig rig_;
   SystemOptions options_;
@@ -112,6 +120,8 @@ class System {
   std::vector<FrameStats> stats_;
   std::optional<Pose> T_w_odom_prev_;  // The previous frame's odometry pose, if it had one.
   bool odometry_given_ = false;        // A measurement carried odometry to the estimator.
+  bool local_map_handed_ = false;      // The estimator gave the frontend a local map once.
+  std::optional<bool> saved_map_metric_;  // UseMap: the saved map's unit is the metre.
   // The keyframes with their points, and each one's index in the trajectory: frame, time and
   // pose are refreshed from the estimator's trajectory when asked (they follow later
   // corrections). Mutable: SaveMap refreshes them and lends them to the writer instead of

@@ -118,6 +118,8 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("loop", "mono_sim3_relative_tolerance", &bl.sim3.relative_tolerance);
   v->Field("loop", "mono_sim3_min_inliers", &bl.sim3.min_inliers);
   v->Field("loop", "mono_gate_fraction", &l.mono_gate_fraction);
+  v->Field("loop", "relocalise", &l.relocalise);
+  v->Field("loop", "relocalise_below_mapped", &l.relocalise_below_mapped);
   SlidingWindowEstimatorOptions& b = o->ba;
   v->Field("ba", "window_size", &b.ba.window_size);
   v->Field("ba", "use_marginalization", &b.ba.use_marginalization);

@@ -244,6 +244,57 @@ void Frontend::ReacquireFromKeyframe(TrackedFrame* cur) const {
   }
 }
 
+void Frontend::UseMap(const SavedMap& map) {
+  CHECK(!prev_) << "Frontend::UseMap before the first frame";
+  std::unordered_map<LandmarkId, Eigen::Vector3d> p_w;
+  for (const SavedLandmark& l : map.landmarks) {
+    p_w[l.id] = l.p_w;
+    next_landmark_ = std::max(next_landmark_, l.id.value + 1);
+  }
+  for (const SavedKeyframe& kf : map.keyframes) {
+    for (const SavedKeyframePoint& p : kf.points) {
+      next_landmark_ = std::max(next_landmark_, p.landmark.value + 1);
+    }
+    place_recognition_.AddSavedKeyframe(kf, options_.harris.patch_size,
+                                        options_.harris.patch_spacing, p_w);
+  }
+  awaiting_map_ = true;
+}
+
+bool Frontend::RelocalizeFromDatabase(const Frame& frame, TrackedFrame* cur) {
+  if (!options_.loop.enable || !options_.loop.relocalise ||
+      place_recognition_.database().size() + place_recognition_.saved_map_database().size() == 0 ||
+      static_cast<int>(cur->detection.points.size()) < options_.loop.min_inliers) {
+    return false;
+  }
+  // One camera: no point has a depth here; the entry keeps the strongest corners with an id.
+  const std::vector<std::optional<StereoPoint>> no_depth(cur->detection.points.size());
+  const std::vector<std::optional<StereoPoint>>& points = rig_.is_stereo() ? cur->stereo : no_depth;
+  const KeyframeEntry query =
+      place_recognition_.MakeEntry(frame.id, frame.t_ns, cur->T_w_c, path_length_m_, frame.left,
+                                   cur->detection, points, cur->landmark);
+  const std::optional<PlaceMatch> match =
+      place_recognition_.Relocalize(query, cur->detection, cur->stereo, cur->landmark);
+  const PlaceRecognitionStats& stats = place_recognition_.last_stats();
+  if (!match) {
+    VLOG(1) << "frame " << frame.id << ": lost; no place recognised among " << stats.searched
+            << " keyframes (best appearance " << stats.best_score << ", " << stats.candidates
+            << " verified)";
+    return false;
+  }
+  int relabelled = 0;
+  for (size_t k = 0; k < match->current_point.size(); ++k) {
+    LandmarkId& id = cur->landmark[match->current_point[k]];
+    if (local_map_search_.IsMapped(id)) continue;  // Found again by RelocalizeFromKeyframe.
+    id = match->loop.relabelled[k].second;
+    ++relabelled;
+  }
+  VLOG(1) << "frame " << frame.id << ": lost; relocalised at the place of keyframe "
+          << match->loop.old_frame << " (" << match->loop.inliers << " inliers, " << relabelled
+          << " points take its landmark ids)";
+  return relabelled > 0;
+}
+
 void Frontend::RelocalizeFromKeyframe(TrackedFrame* cur) const {
   // No pose to predict with: the matcher's group constraints alone (any rotation), and only
   // the landmarks the estimator maps, which it verifies (RANSAC PnP) before using them.
@@ -325,6 +376,16 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   out.t_ns = frame.t_ns;
   out.stereo = stereo;
 
+  // After a relocalisation the stereo dead reckoning restarts from the estimator's pose (see
+  // relocalised_prev_); the extrapolation across the gap is discarded. (One camera's dead
+  // reckoning has its own unit and is only compared with itself: it goes on.)
+  if (relocalised_prev_ && prev_ && rig_.is_stereo()) {
+    if (const std::optional<Pose> T_w_prev = local_map_search_.TrackedPoseAt(prev_->id)) {
+      prev_->T_w_c = *T_w_prev;
+    }
+  }
+  relocalised_prev_ = false;
+  if (awaiting_map_ && prev_ && local_map_search_.TrackedPoseAt(prev_->id)) awaiting_map_ = false;
   // The last keyframe the estimator tracked: what a lost frame is relocalised against.
   if (keyframe_ && prev_ && keyframe_->id == prev_->id && local_map_search_.has_map() &&
       !local_map_search_.LostAt(prev_->id)) {
@@ -403,11 +464,24 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
                                                &cur.landmark, &cur.track_length);
     VLOG(2) << "frame " << frame.id << ": " << found << " points found in the local map";
   }
-  if (prev_ && tracked_keyframe_ && local_map_search_.LostAt(prev_->id)) {
-    RelocalizeFromKeyframe(&cur);
-  }
+  // Lost before, or not yet placed in a saved map (UseMap): from the first frame on.
+  const bool lost_before = (prev_ && local_map_search_.LostAt(prev_->id)) || awaiting_map_;
+  if (lost_before && tracked_keyframe_) RelocalizeFromKeyframe(&cur);
   for (size_t i = 0; i < n; ++i) {
     if (!cur.landmark[i].valid()) cur.landmark[i] = LandmarkId(next_landmark_++);
+  }
+  // The last tracked keyframe may be out of view after a long loss: then any mapped place will
+  // do. Not while the window's landmarks are found around the last tracked pose: a short loss
+  // recovers there (the rendered `fast` run finds 12-30 after each of its lost frames and
+  // recovers; relabelling some of its points from the database too made it lose 14 more).
+  bool relocalised = false;
+  if (lost_before) {
+    const int mapped = static_cast<int>(std::count_if(
+        cur.landmark.begin(), cur.landmark.end(),
+        [&](const LandmarkId& id) { return local_map_search_.IsMapped(id); }));
+    if (mapped < options_.loop.relocalise_below_mapped) {
+      relocalised = RelocalizeFromDatabase(frame, &cur);
+    }
   }
   out.timings.track_ms = MsSince(t0);
   T_w_cur_ = cur.T_w_c;
@@ -415,7 +489,8 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
 
   // 4. Keyframe decision against the last keyframe.
   ++frames_since_keyframe_;
-  if (!keyframe_ || out.status != TrackingStatus::kTracking) {
+  // A relocalised frame starts again where the map is: a keyframe.
+  if (!keyframe_ || out.status != TrackingStatus::kTracking || relocalised) {
     out.is_keyframe = true;
   } else {
     // The keyframe's landmarks the evidence counts: with a local map (one camera), those the
@@ -448,7 +523,9 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   }
 
   // 5. Loop detection at keyframes (relabels the recognised points before they are output).
-  if (out.is_keyframe && options_.loop.enable &&
+  // Not after a loss: the dead-reckoned pose that gates a loop is an extrapolation then, and a
+  // recognised place has already relabelled the points (RelocalizeFromDatabase).
+  if (out.is_keyframe && options_.loop.enable && !lost_before &&
       (stereo || (prev_ && local_map_search_.has_map()))) {
     t0 = Clock::now();
     out.loop = DetectLoop(frame, motion, &cur);
@@ -474,6 +551,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   if (!stereo || options_.local_map.stereo) {
     local_map_search_.Remember(cur.id, cur.detection, cur.landmark, cur.track_length);
   }
+  relocalised_prev_ = relocalised;
   if (out.is_keyframe) {
     keyframe_ = cur;
     frames_since_keyframe_ = 0;

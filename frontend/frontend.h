@@ -98,6 +98,11 @@ class Frontend {
   // The estimator's landmarks after the frame just processed (see local_map_search.h): the next
   // frame searches them around their predicted projections.
   void SetLocalMap(LocalMap map) { local_map_search_.SetLocalMap(std::move(map)); }
+  // Starts the run in a saved map (System::UseMap, before the first frame): its keyframes join
+  // the place recognition for relocalisation, the new landmark ids start after the map's, and
+  // every frame is relocalised against the database until the estimator reports one tracked
+  // (SetLocalMap). The map must suit the options (System::UseMap checks it).
+  void UseMap(const SavedMap& map);
   // The keyframe database and the last search's statistics.
   const PlaceRecognition& place_recognition() const { return place_recognition_; }
   PlaceRecognition* mutable_place_recognition() { return &place_recognition_; }
@@ -136,6 +141,11 @@ class Frontend {
   // After a frame the estimator lost (one camera): the keyframe's mapped landmarks matched
   // without a prior (frontend/local_map_search.h).
   void RelocalizeFromKeyframe(TrackedFrame* cur) const;
+  // After a frame the estimator lost, when the place recognition keeps a database: the current
+  // place searched among ALL keyframes (PlaceRecognition::Relocalize); the recognised points
+  // that carry no mapped id take the old landmark ids, which the estimator verifies by PnP.
+  // True when a place was recognised.
+  bool RelocalizeFromDatabase(const Frame& frame, TrackedFrame* cur);
   // At a keyframe: searches the database, relabels the recognised points, adds the keyframe.
   std::optional<LoopDetection> DetectLoop(const Frame& frame,
                                           const std::optional<MotionEstimate>& motion,
@@ -157,6 +167,11 @@ class Frontend {
   double path_length_m_ = 0.0;  // Dead-reckoned distance travelled.
   int64_t next_landmark_ = 0;
   int frames_since_keyframe_ = 0;
+  // The previous frame was relocalised from the database: once the estimator has placed it, the
+  // dead reckoning continues from the estimator's pose instead of the extrapolation of the gap.
+  bool relocalised_prev_ = false;
+  // UseMap: no frame tracked in the saved map yet.
+  bool awaiting_map_ = false;
 };
 
 }  // namespace dala

@@ -110,6 +110,11 @@ class LocalMapSearch {
   bool has_map() const { return options_.enable && map_.has_value(); }
   // The estimator lost frame `frame` (its map came with tracked = false).
   bool LostAt(FrameId frame) const { return map_ && map_->frame == frame && !map_->tracked; }
+  // The estimator's pose of frame `frame` when it tracked that frame (its last local map).
+  std::optional<Pose> TrackedPoseAt(FrameId frame) const {
+    if (map_ && map_->frame == frame && map_->tracked) return map_->T_w_c;
+    return std::nullopt;
+  }
   // The landmark is in the last local map.
   bool IsMapped(LandmarkId id) const { return point_of_.count(id) > 0; }
 

@@ -42,6 +42,7 @@ bool PlaceRecognitionOptions::IsValid(std::string* why) const {
     return fail("loop.min_inlier_ratio must be in [0, 1]");
   if (keyframes_between_loops < 0) return fail("loop.keyframes_between_loops must be >= 0");
   if (!(mono_gate_fraction > 0.0)) return fail("loop.mono_gate_fraction must be > 0");
+  if (relocalise_below_mapped < 0) return fail("loop.relocalise_below_mapped must be >= 0");
   if (mono_max_entry_points < min_inliers)
     return fail("loop.mono_max_entry_points must be >= loop.min_inliers");
   return true;
@@ -154,10 +155,12 @@ bool PlaceRecognition::WithinGate(const KeyframeEntry& old, const KeyframeEntry&
 std::optional<PlaceMatch> PlaceRecognition::Verify(
     const KeyframeEntry& old, const KeyframeEntry& query, const DetectedImage& detection,
     const std::vector<std::optional<StereoPoint>>& stereo, const std::vector<LandmarkId>& landmark,
-    bool* rejected_by_gate) const {
+    bool* rejected_by_gate, bool gate) const {
   if (rejected_by_gate) *rejected_by_gate = false;
   if (static_cast<int>(old.size()) < options_.min_inliers) return std::nullopt;
   const std::vector<Match> matches = MatchPoints(old.points, detection, options_.matcher);
+  VLOG(2) << "place recognition: keyframe " << old.frame << " (" << old.size() << " points): "
+          << matches.size() << " matches";
   if (static_cast<int>(matches.size()) < options_.min_inliers) return std::nullopt;
   if (!rig_.is_stereo()) return VerifyMono(old, detection, landmark, matches);
   std::vector<MotionCorrespondence> corrs;
@@ -171,6 +174,8 @@ std::optional<PlaceMatch> PlaceRecognition::Verify(
     corrs.push_back(c);
   }
   const std::optional<MotionResult> pnp = pnp_.Estimate3D2D(corrs);
+  VLOG(2) << "place recognition: keyframe " << old.frame << ": PnP "
+          << (pnp ? std::to_string(pnp->estimate.inliers) + " inliers" : "failed");
   if (!pnp) return std::nullopt;
   const int inliers = pnp->estimate.inliers;
   if (inliers < options_.min_inliers ||
@@ -178,7 +183,7 @@ std::optional<PlaceMatch> PlaceRecognition::Verify(
     return std::nullopt;
   }
   const Pose T_w_cur_loop = old.T_w_c * pnp->estimate.T_prev_cur;
-  if (!WithinGate(old, query, T_w_cur_loop.translation())) {
+  if (gate && !WithinGate(old, query, T_w_cur_loop.translation())) {
     if (rejected_by_gate) *rejected_by_gate = true;
     return std::nullopt;
   }
@@ -234,6 +239,110 @@ PlaceMatch PlaceRecognition::MakeMatch(const KeyframeEntry& old,
   return out;
 }
 
+void PlaceRecognition::AddSavedKeyframe(const SavedKeyframe& keyframe, int patch_size,
+                                        double patch_spacing,
+                                        const std::unordered_map<LandmarkId, Eigen::Vector3d>& p_w) {
+  KeyframeEntry e;
+  e.frame = keyframe.frame;
+  e.t_ns = keyframe.t_ns;
+  e.T_w_c = keyframe.T_w_c;
+  CHECK_EQ(keyframe.thumbnail.size(),
+           static_cast<size_t>(options_.thumbnail_width) * options_.thumbnail_height)
+      << "a saved keyframe's thumbnail must have this place recognition's size";
+  e.global_descriptor = cv::Mat(options_.thumbnail_height, options_.thumbnail_width, CV_32F,
+                                const_cast<float*>(keyframe.thumbnail.data()))
+                            .clone();
+  e.points.patch_size = patch_size;
+  e.points.patch_spacing = patch_spacing;
+  e.points.image_size = cv::Size(rig_.left.width, rig_.left.height);
+  const Pose T_c_w = keyframe.T_w_c.inverse();
+  std::vector<const SavedKeyframePoint*> rows;
+  for (const SavedKeyframePoint& p : keyframe.points) {
+    if (!p.landmark.valid()) continue;
+    if (rig_.is_stereo() && !p_w.count(p.landmark)) continue;
+    CHECK_EQ(p.descriptor.size(), static_cast<size_t>(patch_size * patch_size));
+    rows.push_back(&p);
+  }
+  e.points.descriptors.create(static_cast<int>(rows.size()), patch_size * patch_size, CV_32F);
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const SavedKeyframePoint& p = *rows[k];
+    InterestPoint ip;
+    ip.uv = p.uv;
+    ip.orientation = p.orientation;
+    ip.scale = p.scale;
+    ip.lambda1 = p.lambda1;
+    ip.lambda2 = p.lambda2;
+    e.points.points.push_back(ip);
+    std::copy(p.descriptor.begin(), p.descriptor.end(),
+              e.points.descriptors.ptr<float>(static_cast<int>(k)));
+    e.landmark.push_back(p.landmark);
+    std::optional<StereoPoint> point;
+    const auto it = p_w.find(p.landmark);
+    if (it != p_w.end()) {
+      // The map's optimised landmark in the keyframe's camera (no covariance: a map point).
+      point = StereoPoint();
+      point->p_c0 = T_c_w * it->second;
+    }
+    e.stereo.push_back(point);
+  }
+  saved_map_.Add(std::move(e));
+}
+
+std::vector<std::pair<double, const KeyframeEntry*>> PlaceRecognition::RankCandidates(
+    const KeyframeEntry& query, bool relocalisation) {
+  std::vector<std::pair<double, const KeyframeEntry*>> scored;
+  const auto score_entry = [&](const KeyframeEntry& e) {
+    const double score = AppearanceScore(e.global_descriptor, query.global_descriptor, options_);
+    if (score > stats_.best_score) {
+      stats_.best_score = score;
+      stats_.best_frame = e.frame;
+    }
+    if (score >= options_.min_appearance_score) scored.emplace_back(score, &e);
+  };
+  if (relocalisation) {
+    for (const KeyframeEntry& e : saved_map_.entries()) {
+      ++stats_.searched;
+      score_entry(e);
+    }
+  }
+  for (const KeyframeEntry& e : database_.entries()) {
+    if (!relocalisation && query.frame.value - e.frame.value < options_.min_frame_gap) {
+      break;  // Time order: the rest are younger still.
+    }
+    ++stats_.searched;
+    if (!relocalisation && !WithinGate(e, query, e.T_w_c.translation())) {
+      ++stats_.gated_out;
+      continue;
+    }
+    score_entry(e);
+  }
+  // Best first; ties keep the scan order (the saved map, then older first): deterministic.
+  std::stable_sort(scored.begin(), scored.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (static_cast<int>(scored.size()) > options_.top_k) scored.resize(options_.top_k);
+  return scored;
+}
+
+std::optional<PlaceMatch> PlaceRecognition::VerifyCandidates(
+    const std::vector<std::pair<double, const KeyframeEntry*>>& ranked,
+    const KeyframeEntry& query, const DetectedImage& detection,
+    const std::vector<std::optional<StereoPoint>>& stereo,
+    const std::vector<LandmarkId>& landmark, bool gate) {
+  for (const auto& [score, entry] : ranked) {
+    ++stats_.candidates;
+    bool rejected = false;
+    std::optional<PlaceMatch> found =
+        Verify(*entry, query, detection, stereo, landmark, &rejected, gate);
+    stats_.rejected_by_gate |= rejected;
+    if (found) {
+      found->loop.appearance_score = score;
+      stats_.best_inliers = std::max(stats_.best_inliers, found->loop.inliers);
+      return found;
+    }
+  }
+  return std::nullopt;
+}
+
 std::optional<PlaceMatch> PlaceRecognition::Detect(
     const KeyframeEntry& query, const DetectedImage& detection,
     const std::vector<std::optional<StereoPoint>>& stereo,
@@ -243,39 +352,25 @@ std::optional<PlaceMatch> PlaceRecognition::Detect(
   std::optional<PlaceMatch> found;
   ++keyframes_since_loop_;
   if (options_.enable && keyframes_since_loop_ > options_.keyframes_between_loops) {
-    // Old enough, within the gate, scored; best first (ties: older first, deterministic).
-    std::vector<std::pair<double, size_t>> scored;
-    const auto& entries = database_.entries();
-    for (size_t k = 0; k < entries.size(); ++k) {
-      const KeyframeEntry& e = entries[k];
-      if (query.frame.value - e.frame.value < options_.min_frame_gap) break;  // Time order.
-      ++stats_.searched;
-      if (!WithinGate(e, query, e.T_w_c.translation())) {
-        ++stats_.gated_out;
-        continue;
-      }
-      const double score = AppearanceScore(e.global_descriptor, query.global_descriptor, options_);
-      if (score > stats_.best_score) {
-        stats_.best_score = score;
-        stats_.best_frame = e.frame;
-      }
-      if (score >= options_.min_appearance_score) scored.emplace_back(score, k);
-    }
-    std::stable_sort(scored.begin(), scored.end(),
-                     [](const auto& a, const auto& b) { return a.first > b.first; });
-    if (static_cast<int>(scored.size()) > options_.top_k) scored.resize(options_.top_k);
-    for (const auto& [score, k] : scored) {
-      ++stats_.candidates;
-      bool gate = false;
-      found = Verify(entries[k], query, detection, stereo, landmark, &gate);
-      stats_.rejected_by_gate |= gate;
-      if (found) {
-        found->loop.appearance_score = score;
-        stats_.best_inliers = std::max(stats_.best_inliers, found->loop.inliers);
-        keyframes_since_loop_ = 0;
-        break;
-      }
-    }
+    found = VerifyCandidates(RankCandidates(query, /*relocalisation=*/false), query, detection,
+                             stereo, landmark, /*gate=*/true);
+    if (found) keyframes_since_loop_ = 0;
+  }
+  stats_.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return found;
+}
+
+std::optional<PlaceMatch> PlaceRecognition::Relocalize(
+    const KeyframeEntry& query, const DetectedImage& detection,
+    const std::vector<std::optional<StereoPoint>>& stereo,
+    const std::vector<LandmarkId>& landmark) {
+  const auto t0 = std::chrono::steady_clock::now();
+  stats_ = PlaceRecognitionStats();
+  std::optional<PlaceMatch> found;
+  if (options_.relocalise) {
+    found = VerifyCandidates(RankCandidates(query, /*relocalisation=*/true), query, detection,
+                             stereo, landmark, /*gate=*/false);
   }
   stats_.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -46,6 +46,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -53,6 +54,7 @@
 
 #include "core/camera.h"
 #include "core/frame_measurement.h"
+#include "core/io/map_file.h"
 #include "core/types.h"
 #include "frontend/keyframe_database.h"
 #include "frontend/matcher.h"
@@ -92,6 +94,13 @@ struct PlaceRecognitionOptions {
   // points (its mapped landmarks first, then the strongest corners: ~0.24 MB per keyframe).
   double mono_gate_fraction = 0.05;
   int mono_max_entry_points = 500;
+  // Relocalisation (Relocalize): after a frame the estimator lost, the whole database is
+  // searched for the current place, with neither the spatial gate nor min_frame_gap (the pose
+  // after a loss is unknown, and any mapped place will do).
+  bool relocalise = true;
+  // ...when the frame after a lost one finds fewer than this many of the window's landmarks
+  // (frontend.cc: more mean a short loss, which recovers in the window).
+  int relocalise_below_mapped = 10;
 
   static MotionEstimatorOptions DefaultPnpOptions();
   bool IsValid(std::string* why) const;
@@ -139,15 +148,33 @@ class PlaceRecognition {
                                    const std::vector<std::optional<StereoPoint>>& stereo,
                                    const std::vector<LandmarkId>& landmark);
 
-  // Verifies one old entry against the current keyframe (matcher + PnP + gate), regardless of
-  // appearance. Exposed for tests and tools.
+  // Relocalisation after a loss: the place of `query` among ALL entries (no gate, no minimum
+  // age, no pause after a loop), ranked by appearance, the top_k verified as in Detect. The
+  // match relabels the recognised points as a loop does; the caller's estimator verifies them
+  // (PnP on the old landmarks) before trusting them. nullopt: no verified place.
+  std::optional<PlaceMatch> Relocalize(const KeyframeEntry& query, const DetectedImage& detection,
+                                       const std::vector<std::optional<StereoPoint>>& stereo,
+                                       const std::vector<LandmarkId>& landmark);
+
+  // Verifies one old entry against the current keyframe (matcher + PnP, and the spatial gate
+  // when `gate`), regardless of appearance. Exposed for tests and tools.
   std::optional<PlaceMatch> Verify(const KeyframeEntry& old, const KeyframeEntry& query,
                                    const DetectedImage& detection,
                                    const std::vector<std::optional<StereoPoint>>& stereo,
                                    const std::vector<LandmarkId>& landmark,
-                                   bool* rejected_by_gate = nullptr) const;
+                                   bool* rejected_by_gate = nullptr, bool gate = true) const;
 
   void Add(KeyframeEntry entry) { database_.Add(std::move(entry)); }
+  // A keyframe of a saved map (core/io/map_file.h) for relocalisation only (loop detection
+  // never searches them): its points with a landmark id, in its camera when the landmark has a
+  // position in `p_w` (stereo: those only), and its thumbnail as the global descriptor
+  // (thumbnail_width x thumbnail_height floats, as the map declares them). The map's keyframes
+  // go in their saved order.
+  // The caller validates the map (System::UseMap): thumbnails and descriptors of this
+  // recognition's sizes (CHECKed), frame ids increasing.
+  void AddSavedKeyframe(const SavedKeyframe& keyframe, int patch_size, double patch_spacing,
+                        const std::unordered_map<LandmarkId, Eigen::Vector3d>& p_w);
+  const KeyframeDatabase& saved_map_database() const { return saved_map_; }
   const KeyframeDatabase& database() const { return database_; }
   KeyframeDatabase* mutable_database() { return &database_; }
   const PlaceRecognitionStats& last_stats() const { return stats_; }
@@ -162,6 +189,18 @@ class PlaceRecognition {
   PlaceMatch MakeMatch(const KeyframeEntry& old, const std::vector<LandmarkId>& landmark,
                        const std::vector<Match>& matches, const MotionEstimate& estimate,
                        const std::vector<bool>& inlier) const;
+  // The candidates of `query`: entries scoring >= min_appearance_score, best first (ties: older
+  // first), at most top_k; `relocalisation`: every entry, no gate; else old enough and gated.
+  // Fills the search part of stats_.
+  // A relocalisation also ranks the saved map's keyframes.
+  std::vector<std::pair<double, const KeyframeEntry*>> RankCandidates(const KeyframeEntry& query,
+                                                                      bool relocalisation);
+  // Verifies the ranked candidates in order; the first verified one.
+  std::optional<PlaceMatch> VerifyCandidates(
+      const std::vector<std::pair<double, const KeyframeEntry*>>& ranked,
+      const KeyframeEntry& query,
+      const DetectedImage& detection, const std::vector<std::optional<StereoPoint>>& stereo,
+      const std::vector<LandmarkId>& landmark, bool gate);
   // |t_w - query.T_w_c.translation()| within the gate radius of (old, query).
   bool WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
                   const Eigen::Vector3d& t_w) const;
@@ -170,6 +209,7 @@ class PlaceRecognition {
   PlaceRecognitionOptions options_;
   MotionEstimator pnp_;
   KeyframeDatabase database_;
+  KeyframeDatabase saved_map_;  // AddSavedKeyframe.
   PlaceRecognitionStats stats_;
   int keyframes_since_loop_ = 1 << 30;
 };

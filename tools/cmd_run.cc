@@ -39,6 +39,10 @@ DEFINE_bool(strict, false,
             "run: stop with an error (exit 2) at a missing, unreadable or wrongly sized image "
             "instead of skipping its frame");
 
+DEFINE_string(map, "",
+              "run: start in the saved map FILE (the map.dmap of an earlier run): frames are "
+              "relocalised in it until one is placed, and the run continues in its frame");
+
 // --set may be given several times: a validator collects every value.
 static std::vector<std::string>& SetAssignments() {
   static std::vector<std::string> values;
@@ -166,6 +170,14 @@ int RunRun(const std::vector<std::string>& args) {
   CreateDirectories(FLAGS_out);
 
   System system(dataset->rig(), options);
+  if (!FLAGS_map.empty()) {
+    const SavedMap saved = System::LoadMap(FLAGS_map);
+    system.UseMap(saved);
+    std::cerr << "[run] starting in the saved map " << FLAGS_map << " ("
+              << saved.keyframes.size() << " keyframes, " << saved.landmarks.size()
+              << " landmarks, " << (saved.metric ? "metric" : "arbitrary unit")
+              << "): frames without a pose until one is relocalised in it\n";
+  }
   // Ctrl-C / SIGTERM from here on: stop after the current frame and write the results so far.
   // (Installed before the line below, which tells a watching process that the run started.)
   const StopSignal stop;
@@ -269,6 +281,17 @@ int RunRun(const std::vector<std::string>& args) {
         {"p95", Percentile(loop_ms, 0.95)},
         {"max", loop_ms.empty() ? 0.0 : *std::max_element(loop_ms.begin(), loop_ms.end())}}},
       {"landmarks", points.size()}};
+  // --map: the first frame placed in the saved map (-1: none).
+  int64_t localised_at = -1;
+  if (!FLAGS_map.empty()) {
+    for (const FrameStats& s : stats) {
+      if (s.valid) {
+        localised_at = s.frame.value;
+        break;
+      }
+    }
+    summary["saved_map"] = {{"path", FLAGS_map}, {"localised_at_frame", localised_at}};
+  }
   const auto& gt = dataset->ground_truth();
   bool plotted = false;
   std::string evaluation_error;
@@ -306,8 +329,15 @@ int RunRun(const std::vector<std::string>& args) {
             << initialising << " initialising, " << trajectory.size() << " with a pose, "
             << keyframes << " keyframes, " << loops << " loops detected, " << loops_closed
             << " closed)\n"
-            << "scale       " << system.ScaleDescription() << "\n"
-            << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
+            << "scale       " << system.ScaleDescription() << "\n";
+  if (!FLAGS_map.empty()) {
+    std::cout << "saved map   " << FLAGS_map << ": "
+              << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)
+                                    : std::string("never localised (no frame recognised a "
+                                                  "mapped place; no frame has a pose)"))
+              << "\n";
+  }
+  std::cout << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
             << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {
     std::cout << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>()
@@ -339,7 +369,7 @@ const CommandRegistrar kRegistrar({
     "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
     "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
     "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-    "         [--dump_config]\n\n"
+    "         [--map FILE] [--dump_config]\n\n"
     "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
     "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
@@ -349,7 +379,11 @@ const CommandRegistrar kRegistrar({
     "A frame whose image is missing, unreadable or of the wrong size is skipped with a warning\n"
     "and reported lost, without a pose (--strict: exit 2 instead); the first frame must be\n"
     "readable. Ctrl-C (SIGINT) or SIGTERM stops after the current frame: the results of the\n"
-    "frames done are written as usual, report.json says interrupted, exit status 128 + signal.",
+    "frames done are written as usual, report.json says interrupted, exit status 128 + signal.\n\n"
+    "--map FILE starts in the map.dmap of an earlier run (same camera and options; a stereo run\n"
+    "needs a stereo map): each frame is relocalised against the map's keyframes until one is\n"
+    "placed (frames before have no pose), then the run continues in the map's frame and unit;\n"
+    "report.json's summary.saved_map.localised_at_frame says where (ba estimator only).",
     &RunRun,
     __FILE__});
 

@@ -126,6 +126,17 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
       }
     }
   }
+  if (map.thumbnail_width < 0 || map.thumbnail_height < 0) {
+    throw Error() << path << ": negative thumbnail size";
+  }
+  const size_t thumbnail_size = static_cast<size_t>(map.thumbnail_width) * map.thumbnail_height;
+  for (const SavedKeyframe& kf : map.keyframes) {
+    if (kf.thumbnail.size() != thumbnail_size) {
+      throw Error() << path << ": keyframe " << kf.frame << " has a thumbnail of "
+                    << kf.thumbnail.size() << " values, the map declares " << map.thumbnail_width
+                    << "x" << map.thumbnail_height;
+    }
+  }
   WriteFileAtomically(path, [&](std::ostream& os) {
     Writer w(&os);
     w.PutRaw(kMagic, sizeof(kMagic));
@@ -143,6 +154,8 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
         w.Put(p.uv.y());
         w.Put(p.orientation);
         w.Put(p.scale);
+        w.Put(p.lambda1);
+        w.Put(p.lambda2);
         w.PutRaw(reinterpret_cast<const char*>(p.descriptor.data()),
                  p.descriptor.size() * sizeof(float));
       }
@@ -152,6 +165,13 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
       w.Put<int64_t>(l.id.value);
       for (int i = 0; i < 3; ++i) w.Put(l.p_w[i]);
       w.Put<int32_t>(l.observations);
+    }
+    w.Put<uint32_t>(map.metric ? 1 : 0);
+    w.Put<uint32_t>(static_cast<uint32_t>(map.thumbnail_width));
+    w.Put<uint32_t>(static_cast<uint32_t>(map.thumbnail_height));
+    for (const SavedKeyframe& kf : map.keyframes) {
+      w.PutRaw(reinterpret_cast<const char*>(kf.thumbnail.data()),
+               kf.thumbnail.size() * sizeof(float));
     }
     const uint64_t hash = w.hash();
     os.write(reinterpret_cast<const char*>(&hash), sizeof(hash));
@@ -195,7 +215,7 @@ SavedMap ReadMapFile(const std::string& path) {
       throw Error() << path << ": implausible descriptor size " << descriptor_size;
     }
     map.descriptor_size = static_cast<int>(descriptor_size);
-    const size_t point_bytes = 8 + 16 + 8 + 4 * static_cast<size_t>(map.descriptor_size);
+    const size_t point_bytes = 8 + 16 + 16 + 4 * static_cast<size_t>(map.descriptor_size);
     const uint64_t num_keyframes = r.GetCount("keyframes", 8 + 8 + 56 + 8);
     map.keyframes.resize(num_keyframes);
     for (SavedKeyframe& kf : map.keyframes) {
@@ -209,6 +229,8 @@ SavedMap ReadMapFile(const std::string& path) {
         p.uv.y() = r.Get<double>("a point");
         p.orientation = r.Get<float>("a point");
         p.scale = r.Get<float>("a point");
+        p.lambda1 = r.Get<float>("a point");
+        p.lambda2 = r.Get<float>("a point");
         p.descriptor.resize(map.descriptor_size);
         for (float& d : p.descriptor) d = r.Get<float>("a descriptor");
       }
@@ -219,6 +241,27 @@ SavedMap ReadMapFile(const std::string& path) {
       for (int i = 0; i < 3; ++i) l.p_w[i] = r.Get<double>("a landmark");
       l.observations = r.Get<int32_t>("a landmark");
     }
+    const uint32_t metric = r.Get<uint32_t>("the metric flag");
+    if (metric > 1) throw Error() << path << ": metric flag " << metric << " is not 0 or 1";
+    map.metric = metric == 1;
+    // Checked while unsigned, each and their product against the bytes left.
+    const uint32_t width = r.Get<uint32_t>("the thumbnail size");
+    const uint32_t height = r.Get<uint32_t>("the thumbnail size");
+    if (width > 1024 || height > 1024) {
+      throw Error() << path << ": implausible thumbnail size " << width << "x" << height;
+    }
+    const size_t thumbnail_bytes = sizeof(float) * static_cast<size_t>(width) * height;
+    if (thumbnail_bytes > 0 && map.keyframes.size() > (body - r.pos()) / thumbnail_bytes) {
+      throw Error() << path << ": corrupted map file: " << map.keyframes.size() << " thumbnails of "
+                    << width << "x" << height << " do not fit in the remaining "
+                    << (body - r.pos()) << " bytes";
+    }
+    map.thumbnail_width = static_cast<int>(width);
+    map.thumbnail_height = static_cast<int>(height);
+    for (SavedKeyframe& kf : map.keyframes) {
+      kf.thumbnail.resize(static_cast<size_t>(width) * height);
+      for (float& v : kf.thumbnail) v = r.Get<float>("a thumbnail");
+    }
   } catch (const Error& e) {
     const std::string message = e.message();
     if (message.rfind(path, 0) == 0) throw;
@@ -226,7 +269,7 @@ SavedMap ReadMapFile(const std::string& path) {
   }
   if (r.pos() != body) {
     throw Error() << path << ": corrupted map file: " << (body - r.pos())
-                  << " unexpected bytes after the landmarks";
+                  << " unexpected bytes after the thumbnails";
   }
   return map;
 }

@@ -5,7 +5,7 @@
 // points (landmark id, position, orientation, scale and the matcher's patch descriptor), and the
 // landmarks in the world frame. It holds what place recognition and relocalisation need.
 //
-// Binary format, version 1 (little-endian, IEEE floats; docs/api.md gives the same table):
+// Binary format, version 2 (little-endian, IEEE floats; docs/api.md gives the same table):
 //   char[8]  magic "DALAMAP\0"
 //   uint32   version (1)
 //   uint32   descriptor_size D (floats per descriptor; 0 when the map has none)
@@ -13,10 +13,18 @@
 //              int64 frame id, int64 t_ns, float64[7] T_w_c as (qx qy qz qw tx ty tz),
 //              uint64 point count, then per point:
 //                int64 landmark id (-1: none), float64[2] uv (left image pixels),
-//                float32 orientation (rad), float32 scale, float32[D] descriptor
+//                float32 orientation (rad), float32 scale, float32[2] the Harris matrix's
+//                eigenvalues (largest first; the matcher compares their ratio),
+//                float32[D] descriptor
 //   uint64   landmark count, then per landmark: int64 id, float64[3] p_w, int32 observations
+//   uint32   metric: 1 when the map's unit is the metre (stereo), 0 when it is arbitrary (one
+//            camera: the unit of its two-view initialisation)
+//   uint32   thumbnail width W, uint32 thumbnail height H (0 0: no thumbnails), then per
+//            keyframe, in the order above: float32[W*H] thumbnail (place recognition's global
+//            descriptor, row-major), what ranks the keyframes when a run relocalises in the map
 //   uint64   FNV-1a 64 hash of every preceding byte (detects truncation and corruption)
-// A reader accepts exactly the versions it knows and says which ones when it meets another.
+// A reader accepts exactly the versions it knows and says which ones when it meets another
+// (version 1, before the metric flag and the thumbnails, is refused: save the map again).
 
 #include <cstdint>
 #include <string>
@@ -30,7 +38,7 @@
 namespace dala {
 
 struct MapFileVersion {
-  static constexpr uint32_t kCurrent = 1;
+  static constexpr uint32_t kCurrent = 2;
 };
 
 struct SavedKeyframePoint {
@@ -38,6 +46,8 @@ struct SavedKeyframePoint {
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();
   float orientation = 0.f;
   float scale = 1.f;
+  float lambda1 = 0.f;  // The Harris matrix's eigenvalues (frontend/harris.h).
+  float lambda2 = 0.f;
   std::vector<float> descriptor;  // descriptor_size floats (or empty when the map has none).
 };
 
@@ -46,6 +56,9 @@ struct SavedKeyframe {
   int64_t t_ns = 0;
   Pose T_w_c = Pose::Identity();
   std::vector<SavedKeyframePoint> points;
+  // The keyframe image's thumbnail (thumbnail_width x thumbnail_height of the map, row-major),
+  // empty when the map has none.
+  std::vector<float> thumbnail;
 };
 
 struct SavedLandmark {
@@ -56,12 +69,16 @@ struct SavedLandmark {
 
 struct SavedMap {
   int descriptor_size = 0;
+  bool metric = true;  // false: one camera's arbitrary unit.
+  int thumbnail_width = 0;  // 0 0: no thumbnails.
+  int thumbnail_height = 0;
   std::vector<SavedKeyframe> keyframes;
   std::vector<SavedLandmark> landmarks;
 };
 
 // Writes atomically (a reader never sees half a file). Throws dala::Error when the file cannot
-// be written or a point's descriptor does not have descriptor_size floats.
+// be written, a point's descriptor does not have descriptor_size floats or a keyframe's
+// thumbnail not thumbnail_width x thumbnail_height.
 void WriteMapFile(const std::string& path, const SavedMap& map);
 
 // Throws dala::Error naming the file and what is wrong: not a dala map, a version this build

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 
 #include <fstream>
 #include <iterator>
@@ -22,13 +23,20 @@ namespace {
 
 using ::testing::HasSubstr;
 
+// MakeMap's thumbnails: 3 keyframes of 4x3 floats, the last bytes before the hash.
+constexpr size_t kThumbnailBytes = 3 * 12 * sizeof(float);
+
 SavedMap MakeMap(int descriptor_size) {
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 5.0);
   SavedMap map;
   map.descriptor_size = descriptor_size;
+  map.metric = false;
+  map.thumbnail_width = 4;
+  map.thumbnail_height = 3;
   for (int k = 0; k < 3; ++k) {
     SavedKeyframe kf;
+    for (int i = 0; i < 12; ++i) kf.thumbnail.push_back(static_cast<float>(n(rng)));
     kf.frame = FrameId(10 * k + 1);
     kf.t_ns = 1'000'000'007LL * k;
     kf.T_w_c = testing::RandomPose(rng, 1.0, 3.0);
@@ -38,6 +46,8 @@ SavedMap MakeMap(int descriptor_size) {
       p.uv = Eigen::Vector2d(n(rng) + 300, n(rng) + 200);
       p.orientation = static_cast<float>(0.1 * i);
       p.scale = 1.41421356f;
+      p.lambda1 = 900.f + i;
+      p.lambda2 = 300.f - i;
       for (int d = 0; d < descriptor_size; ++d) p.descriptor.push_back(static_cast<float>(n(rng)));
       kf.points.push_back(p);
     }
@@ -125,6 +135,9 @@ TEST(MapFileTest, RoundTripIsExact) {
     WriteMapFile(dir / "m.dmap", map);
     const SavedMap back = ReadMapFile(dir / "m.dmap");
     ASSERT_EQ(back.descriptor_size, descriptor_size);
+    EXPECT_EQ(back.metric, map.metric);
+    EXPECT_EQ(back.thumbnail_width, 4);
+    EXPECT_EQ(back.thumbnail_height, 3);
     ASSERT_EQ(back.keyframes.size(), map.keyframes.size());
     for (size_t k = 0; k < map.keyframes.size(); ++k) {
       const SavedKeyframe& a = map.keyframes[k];
@@ -138,8 +151,11 @@ TEST(MapFileTest, RoundTripIsExact) {
         EXPECT_EQ(a.points[i].uv, b.points[i].uv);
         EXPECT_EQ(a.points[i].orientation, b.points[i].orientation);
         EXPECT_EQ(a.points[i].scale, b.points[i].scale);
+        EXPECT_EQ(a.points[i].lambda1, b.points[i].lambda1);
+        EXPECT_EQ(a.points[i].lambda2, b.points[i].lambda2);
         EXPECT_EQ(a.points[i].descriptor, b.points[i].descriptor);
       }
+      EXPECT_EQ(a.thumbnail, b.thumbnail);
     }
     ASSERT_EQ(back.landmarks.size(), map.landmarks.size());
     for (size_t i = 0; i < map.landmarks.size(); ++i) {
@@ -223,11 +239,15 @@ TEST(MapFileTest, FlippedBytesNeverCrashOrAllocateWithoutBound) {
   std::vector<size_t> positions;
   for (size_t k = 0; k < 16; ++k) positions.push_back(good.size() * k / 16);
   // The counts and sizes: descriptor size, keyframe count, the first keyframe's point count
-  // (after its ids and pose), the landmark count (4 landmarks of 36 bytes before the hash).
+  // (after its ids and pose), the landmark count (4 landmarks of 36 bytes before the metric flag
+  // and the thumbnail size), the thumbnail width and height.
   const size_t first_points = 8 + 4 + 4 + 8 + 8 + 8 + 56;
-  const size_t landmarks = good.size() - 8 - 4 * 36 - 8;
+  const size_t tail = 8 + kThumbnailBytes;  // The thumbnails and the hash.
+  const size_t landmarks = good.size() - tail - 12 - 4 * 36 - 8;
+  const size_t thumbnail_size = good.size() - tail - 8;
   const std::vector<size_t> counts = {12, 15, 16, 20, 23, first_points, first_points + 7,
-                                      landmarks, landmarks + 7};
+                                      landmarks, landmarks + 7, thumbnail_size,
+                                      thumbnail_size + 3, thumbnail_size + 4, thumbnail_size + 7};
   positions.insert(positions.end(), counts.begin(), counts.end());
   for (size_t pos : positions) {
     for (unsigned char mask : {0x01, 0x80, 0xFF}) {
@@ -259,11 +279,14 @@ TEST(MapFileTest, ExtremeCountsWithAValidChecksumAreErrors) {
   WriteMapFile(dir / "m.dmap", MakeMap(121));
   const std::string good = ReadBytes(dir / "m.dmap");
   const size_t first_points = 8 + 4 + 4 + 8 + 8 + 8 + 56;
-  const size_t landmarks = good.size() - 8 - 4 * 36 - 8;
+  const size_t tail = 8 + kThumbnailBytes;
+  const size_t landmarks = good.size() - tail - 12 - 4 * 36 - 8;
+  const size_t metric = good.size() - tail - 12;  // The metric flag, then width and height.
   struct Field {
     size_t offset, size;
   };
-  for (const Field f : {Field{12, 4}, Field{16, 8}, Field{first_points, 8}, Field{landmarks, 8}}) {
+  for (const Field f : {Field{12, 4}, Field{16, 8}, Field{first_points, 8}, Field{landmarks, 8},
+                        Field{metric + 4, 4}, Field{metric + 8, 4}}) {
     for (const uint64_t value : {~0ull, 1ull << 63, (1ull << 31) - 1, 1ull << 31, 1ull << 32,
                                  0x1000000ull}) {
       std::string crafted = good;
@@ -274,6 +297,22 @@ TEST(MapFileTest, ExtremeCountsWithAValidChecksumAreErrors) {
           << "field at byte " << f.offset << " = " << value << ": " << Name(outcome);
     }
   }
+}
+
+// The fuzzer's seeds (tests/fuzz/corpus/map_file_fuzzer) are maps of the current version, so
+// that fuzzing starts from inputs that reach every field.
+TEST(MapFileTest, FuzzSeedsAreValidMaps) {
+  const std::filesystem::path dir =
+      std::filesystem::path(DALA_SOURCE_DIR) / "tests/fuzz/corpus/map_file_fuzzer";
+  int seeds = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    EXPECT_NO_THROW(ReadMapFile(entry.path().string())) << entry.path();
+    ++seeds;
+  }
+  EXPECT_GE(seeds, 3);
+  const SavedMap d4 = ReadMapFile((dir / "two_keyframes_d4.dmap").string());
+  EXPECT_EQ(d4.thumbnail_width * d4.thumbnail_height, 4);
+  EXPECT_EQ(d4.keyframes.at(1).points.at(1).lambda1, 901.f);
 }
 
 TEST(MapFileTest, DescriptorSizeMismatchIsRefusedAndWritesNothing) {
