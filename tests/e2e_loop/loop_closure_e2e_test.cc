@@ -129,7 +129,8 @@ TEST(LoopClosureE2e, LookAlikeStreetClosesNoLoop) {
             << run.eval.ate.translation.rmse << " m, loops " << run.loops_detected << std::endl;
   EXPECT_EQ(run.loops_detected, 0);
   EXPECT_EQ(run.loops_closed, 0);
-  EXPECT_LT(run.eval.ate.translation.rmse / seq.PathLength(), 0.01);
+  // Measured 0.165 m over the 159 m (0.10 %); a false loop closed would bend the street.
+  EXPECT_LT(run.eval.ate.translation.rmse, 1.5 * 0.165);
 }
 
 // The loop options are in the one option table (YAML, --set, --dump-config, report.json).
