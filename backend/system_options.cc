@@ -79,6 +79,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("keyframe", "max_distance_m", &k.max_distance_m);
   v->Field("keyframe", "max_rotation_rad", &k.max_rotation_rad);
   v->Field("keyframe", "max_frames", &k.max_frames);
+  v->Field("keyframe", "min_parallax_px", &k.min_parallax_px);
   v->Field("keyframe", "min_frames", &k.min_frames);
   FrontendOptions& f = o->frontend;
   v->Field("frontend", "tracking_radius_px", &f.tracking_radius_px);

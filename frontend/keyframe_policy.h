@@ -14,7 +14,11 @@ namespace dala {
 //  - the median image displacement of the landmarks tracked since the keyframe (parallax)
 //    exceeds `max_parallax_px` (enough baseline for the monocular estimators);
 //  - the camera travelled more than `max_distance_m` or turned more than `max_rotation_rad`;
-//  - `max_frames` frames passed (bounded gap for the backend).
+//  - `max_frames` frames passed (bounded gap for the backend) AND the view has changed at
+//    all: a median parallax of at least `min_parallax_px` or a rotation of at least a tenth of
+//    `max_rotation_rad`. A still camera (parallax of the image noise only) adds no keyframe, so
+//    its map and memory stay bounded (issue 14: 1,000 still frames used to add 100 keyframes of
+//    ~0.5 MB each).
 // A frame never becomes a keyframe while fewer than `min_frames` frames passed.
 struct KeyframePolicyOptions {
   double min_tracked_fraction = 0.6;
@@ -22,6 +26,7 @@ struct KeyframePolicyOptions {
   double max_distance_m = 1.0;
   double max_rotation_rad = 0.17;  // ~10 degrees.
   int max_frames = 10;
+  double min_parallax_px = 1.0;  // ...for the frame-count criterion (see above).
   int min_frames = 1;
 
   bool IsValid(std::string* why) const;
