@@ -22,7 +22,9 @@
 #include "core/io/dataset.h"
 #include "core/io/ply_writer.h"
 #include "core/io/trajectory_io.h"
+#include "tools/bench/line_chart.h"
 #include "tools/command.h"
+#include "tools/process_memory.h"
 #include "tools/stop_signal.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
@@ -190,6 +192,7 @@ int RunRun(const std::vector<std::string>& args) {
   size_t done = 0;
   int skipped_so_far = 0;
   TrackResult last;
+  std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
   while (!stop.received()) {
     try {
       if (!dataset->Next(&frame)) break;
@@ -213,6 +216,7 @@ int RunRun(const std::vector<std::string>& args) {
       last.status = TrackingStatus::kLost;
     }
     ++done;
+    rss_mb.push_back(ResidentMemoryMb());
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     progress.Update(done, done / std::max(elapsed, 1e-9), last.status);
@@ -310,7 +314,37 @@ int RunRun(const std::vector<std::string>& args) {
     }
   }
   nlohmann::json frames = nlohmann::json::array();
-  for (const FrameStats& s : stats) frames.push_back(FrameJson(s));
+  for (size_t i = 0; i < stats.size(); ++i) {
+    frames.push_back(FrameJson(stats[i]));
+    if (i < rss_mb.size()) frames.back()["rss_mb"] = rss_mb[i];
+  }
+  // Memory against frames: keyframes so far and resident memory (issue 14: bounded by the
+  // place, not the time, is what this curve shows or not).
+  const double peak_rss_mb = PeakResidentMemoryMb();
+  summary["peak_rss_mb"] = peak_rss_mb;
+  {
+    bench::ChartSeries keyframe_curve{"keyframes", {}, {}};
+    bench::ChartSeries rss_curve{"resident memory", {}, {}};
+    int keyframes_so_far = 0;
+    for (size_t i = 0; i < stats.size(); ++i) {
+      keyframes_so_far += stats[i].keyframe;
+      keyframe_curve.x.push_back(static_cast<double>(i));
+      keyframe_curve.y.push_back(keyframes_so_far);
+      if (i < rss_mb.size()) {
+        rss_curve.x.push_back(static_cast<double>(i));
+        rss_curve.y.push_back(rss_mb[i]);
+      }
+    }
+    bench::LineChartOptions top, bottom;
+    top.title = "keyframes so far";
+    top.x_label = "frame";
+    top.y_label = "keyframes";
+    bottom.title = "resident memory of the process";
+    bottom.x_label = "frame";
+    bottom.y_label = "MiB";
+    bench::DrawStackedLineCharts({{{keyframe_curve}, top}, {{rss_curve}, bottom}},
+                                 dir + "/memory.png");
+  }
   const nlohmann::json report = {
       {"dataset",
        {{"path", args[0]},
@@ -337,6 +371,8 @@ int RunRun(const std::vector<std::string>& args) {
                                                   "mapped place; no frame has a pose)"))
               << "\n";
   }
+  std::cout << "memory      " << std::fixed << std::setprecision(0) << peak_rss_mb
+            << " MiB peak resident, " << keyframes << " keyframes (memory.png)\n";
   std::cout << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
             << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {
@@ -353,7 +389,8 @@ int RunRun(const std::vector<std::string>& args) {
                  "by time (trajectory.txt)\n";
   }
   std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
-            << "map.dmap, report.json" << (plotted ? ", trajectory.png" : "") << ")\n";
+            << "map.dmap, report.json, memory.png" << (plotted ? ", trajectory.png" : "")
+            << ")\n";
   if (signal != 0) {
     std::cerr << "[run] interrupted by " << StopSignalName(signal) << ": the results cover the "
               << done << " frames done of " << dataset->size() << " (report.json: "
@@ -375,7 +412,8 @@ const CommandRegistrar kRegistrar({
     "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
     "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
     "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"
-    "ground truth) and trajectory.png (estimate over ground truth).\n\n"
+    "ground truth), trajectory.png (estimate over ground truth) and memory.png (keyframes\n"
+    "and resident memory against frames; report.json has each frame's rss_mb).\n\n"
     "A frame whose image is missing, unreadable or of the wrong size is skipped with a warning\n"
     "and reported lost, without a pose (--strict: exit 2 instead); the first frame must be\n"
     "readable. Ctrl-C (SIGINT) or SIGTERM stops after the current frame: the results of the\n"

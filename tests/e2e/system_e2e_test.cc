@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "backend/system.h"
 #include "core/error.h"
 #include "core/eval/evaluate.h"
@@ -185,7 +187,7 @@ TEST(SystemE2e, DalaRunIsDeterministicAndWritesEveryOutput) {
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   }
   for (const char* f : {"trajectory.txt", "trajectory_kitti.txt", "map.ply", "map.dmap",
-                        "report.json", "trajectory.png"}) {
+                        "report.json", "trajectory.png", "memory.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / (std::string("a/") + f))) << f;
   }
   const std::string a = ReadAll(dir / "a/trajectory.txt");
@@ -195,9 +197,11 @@ TEST(SystemE2e, DalaRunIsDeterministicAndWritesEveryOutput) {
   EXPECT_EQ(ReadTrajectory(dir / "a/trajectory.txt").size(), 40u);
   const std::string report = ReadAll(dir / "a/report.json");
   for (const char* key : {"\"summary\"", "\"ate\"", "\"rmse\"", "\"fps\"", "\"ms_p95\"",
-                          "\"frames\"", "\"options\""}) {
+                          "\"frames\"", "\"options\"", "\"peak_rss_mb\"", "\"rss_mb\""}) {
     EXPECT_NE(report.find(key), std::string::npos) << key;
   }
+  const cv::Mat memory = cv::imread(dir / "a/memory.png");
+  EXPECT_GT(memory.rows, memory.cols / 2) << "two charts, one above the other";
 }
 
 TEST(SystemE2e, DalaRunReportsBadInputClearly) {

@@ -54,8 +54,7 @@ void Text(cv::Mat* img, const std::string& text, cv::Point at, double scale,
 
 }  // namespace
 
-void DrawLineChart(const std::vector<ChartSeries>& series, const LineChartOptions& options,
-                   const std::string& png_path) {
+cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartOptions& options) {
   cv::Mat img(options.height, options.width, CV_8UC3, cv::Scalar::all(255));
   const cv::Rect area(78, 40, options.width - 78 - 20, options.height - 40 - 58);
 
@@ -146,11 +145,47 @@ void DrawLineChart(const std::vector<ChartSeries>& series, const LineChartOption
     }
   }
 
+  return img;
+}
+
+namespace {
+
+void WritePng(const cv::Mat& img, const std::string& png_path) {
   std::vector<uchar> png;
   if (!cv::imencode(".png", img, png)) throw Error() << png_path << ": cannot encode the PNG";
   WriteFileAtomically(png_path, [&](std::ostream& os) {
     os.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
   });
+}
+
+}  // namespace
+
+void DrawLineChart(const std::vector<ChartSeries>& series, const LineChartOptions& options,
+                   const std::string& png_path) {
+  WritePng(RenderLineChart(series, options), png_path);
+}
+
+void DrawStackedLineCharts(const std::vector<StackedChart>& charts, const std::string& png_path) {
+  std::vector<cv::Mat> images;
+  int width = 0;
+  for (const StackedChart& c : charts) {
+    images.push_back(RenderLineChart(c.series, c.options));
+    width = std::max(width, images.back().cols);
+  }
+  for (cv::Mat& img : images) {  // Same width for vconcat: pad on the right with white.
+    if (img.cols < width) {
+      cv::copyMakeBorder(img, img, 0, 0, 0, width - img.cols, cv::BORDER_CONSTANT,
+                         cv::Scalar::all(255));
+    }
+  }
+  cv::Mat stacked;
+  if (images.empty()) {
+    stacked = cv::Mat(LineChartOptions().height, LineChartOptions().width, CV_8UC3,
+                      cv::Scalar::all(255));
+  } else {
+    cv::vconcat(images, stacked);
+  }
+  WritePng(stacked, png_path);
 }
 
 }  // namespace dala::bench

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 namespace dala::bench {
 
 struct ChartSeries {
@@ -29,6 +31,17 @@ struct LineChartOptions {
 // says "no data".
 void DrawLineChart(const std::vector<ChartSeries>& series, const LineChartOptions& options,
                    const std::string& png_path);
+
+// The chart as an image (CV_8UC3, options.width x options.height).
+cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartOptions& options);
+
+// Several charts one above the other in one PNG (written atomically), e.g. quantities of
+// different units against the same x.
+struct StackedChart {
+  std::vector<ChartSeries> series;
+  LineChartOptions options;
+};
+void DrawStackedLineCharts(const std::vector<StackedChart>& charts, const std::string& png_path);
 
 }  // namespace dala::bench
 
