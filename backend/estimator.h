@@ -32,8 +32,8 @@ struct MapPoint {
 struct EstimatorOutput {
   // T_w_c0 of the frame (the world frame is the first frame's camera unless said otherwise).
   Pose T_w_c = Pose::Identity();
-  // False when the estimator could not estimate this frame (it then extrapolates T_w_c and the
-  // trajectory records the frame as not tracked).
+  // False when the estimator could not estimate this frame: T_w_c is then an extrapolation; the
+  // BA estimator leaves the frame out of trajectory(), the EKFs keep the extrapolation there.
   bool valid = false;
   // A monocular estimator waiting for its two-view initialisation: the frame has no pose yet
   // (T_w_c is meaningless; it may get one later, when the map exists, and trajectory() then

@@ -298,7 +298,6 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
     // The new map starts in a window of its own; the old landmarks keep their positions (PnP
     // recovery and loop closure can still use them).
     RestartWindow();
-    last_keyframe_observations_.clear();
   }
   StartMonoMap(*init);
   initializer_.reset();
@@ -401,6 +400,9 @@ void SlidingWindowEstimator::RestartWindow() {
   WaitForWindowSolve();
   ba_ = SlidingWindowBa(IntrinsicsOf(rig_, ba_.disparity_offset_px()), options_.ba);
   for (const auto& [id, p_w] : map_points_) ba_.SetLandmarkPosition(id, p_w);
+  // The last keyframe left with the old window: its observations can pair with none of the new
+  // window's keyframes (mono new landmarks, SelectKeyframeObservations).
+  last_keyframe_observations_.clear();
 }
 
 std::optional<Pose> SlidingWindowEstimator::ResumeOldMap(const FrameMeasurement& m) {

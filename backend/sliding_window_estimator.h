@@ -210,7 +210,7 @@ class SlidingWindowEstimator : public Estimator {
   bool CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id, Pose* T_w_c);
   // A new, empty window (no marginalisation prior); every landmark keeps its last position
   // (PnP recovery, loop closure and the next keyframes use them), the disparity offset its
-  // estimate.
+  // estimate; the last keyframe's observations are forgotten (it left with the window).
   void RestartWindow();
   // Mono, re-initialising after a long loss: the pose of m by PnP on the old map's landmarks
   // (the frontend relocalised it); on success the re-initialisation stops and the old map goes

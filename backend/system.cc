@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 
 #include "backend/ekf/mono_ekf.h"
@@ -244,6 +245,7 @@ SavedMap System::LoadMap(const std::string& path) { return ReadMapFile(path); }
 
 void System::UseMap(const SavedMap& map) {
   if (!stats_.empty()) throw Error() << "a saved map must be given before the first frame";
+  if (saved_map_metric_) throw Error() << "a run starts in one saved map only";
   if (map.keyframes.empty() || map.landmarks.empty()) {
     throw Error() << "the saved map has no keyframes or no landmarks: nothing to relocalise in";
   }
@@ -269,15 +271,43 @@ void System::UseMap(const SavedMap& map) {
                   << f.loop.thumbnail_height
                   << " (loop.thumbnail_width/height): run with the options that made the map";
   }
-  for (size_t k = 1; k < map.keyframes.size(); ++k) {
-    if (!(map.keyframes[k - 1].frame < map.keyframes[k].frame)) {
-      throw Error() << "the saved map's keyframes are not in frame order (frame "
-                    << map.keyframes[k].frame << " after " << map.keyframes[k - 1].frame << ")";
+  if (!f.local_map.enable) {
+    throw Error() << "running in a saved map needs the local-map search "
+                     "(frontend.local_map_search=1): it tells the frontend when a frame is placed";
+  }
+  // A map from someone else: every value the place recognition and the matcher will use is
+  // checked here (their CHECKs and index arithmetic assume sane values), ids below 2^62 so that
+  // the run's new ids, which start after them, cannot overflow.
+  constexpr int64_t kMaxId = int64_t{1} << 62;
+  const size_t thumbnail_size = static_cast<size_t>(map.thumbnail_width) * map.thumbnail_height;
+  const double max_u = 2.0 * rig_.left.width, max_v = 2.0 * rig_.left.height;
+  for (size_t k = 0; k < map.keyframes.size(); ++k) {
+    const SavedKeyframe& kf = map.keyframes[k];
+    if (k > 0 && !(map.keyframes[k - 1].frame < kf.frame)) {
+      throw Error() << "the saved map's keyframes are not in frame order (frame " << kf.frame
+                    << " after " << map.keyframes[k - 1].frame << ")";
+    }
+    if (kf.thumbnail.size() != thumbnail_size || !kf.T_w_c.matrix().allFinite()) {
+      throw Error() << "the saved map's keyframe " << kf.frame
+                    << " has a thumbnail of another size or a non-finite pose";
+    }
+    for (const SavedKeyframePoint& p : kf.points) {
+      const bool sane =
+          p.landmark.value < kMaxId && p.uv.allFinite() && std::abs(p.uv.x()) < max_u &&
+          std::abs(p.uv.y()) < max_v && std::isfinite(p.orientation) &&
+          std::isfinite(p.scale) && p.scale > 0.f && p.scale < 1e3f && std::isfinite(p.lambda1) &&
+          std::isfinite(p.lambda2) && p.lambda1 >= 0.f && p.lambda2 >= 0.f &&
+          p.descriptor.size() == static_cast<size_t>(map.descriptor_size);
+      if (!sane) {
+        throw Error() << "the saved map's keyframe " << kf.frame << " has a point (landmark "
+                      << p.landmark.value << ") with a position, orientation, scale, "
+                      << "eigenvalue, descriptor size or id out of range";
+      }
     }
   }
   std::vector<MapPoint> landmarks;
   for (const SavedLandmark& l : map.landmarks) {
-    if (!l.id.valid() || !l.p_w.allFinite()) {
+    if (!l.id.valid() || l.id.value >= kMaxId || !l.p_w.allFinite()) {
       throw Error() << "the saved map has a landmark with id " << l.id.value
                     << " at a non-finite position or with an invalid id";
     }

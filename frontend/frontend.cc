@@ -379,12 +379,14 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   // After a relocalisation the stereo dead reckoning restarts from the estimator's pose (see
   // relocalised_prev_); the extrapolation across the gap is discarded. (One camera's dead
   // reckoning has its own unit and is only compared with itself: it goes on.)
-  if (relocalised_prev_ && prev_ && rig_.is_stereo()) {
+  // Kept until the estimator has placed a frame (its PnP may succeed a frame later, on the ids
+  // the relocalised frame passed on).
+  if (relocalised_prev_ && prev_) {
     if (const std::optional<Pose> T_w_prev = local_map_search_.TrackedPoseAt(prev_->id)) {
-      prev_->T_w_c = *T_w_prev;
+      if (rig_.is_stereo()) prev_->T_w_c = *T_w_prev;
+      relocalised_prev_ = false;
     }
   }
-  relocalised_prev_ = false;
   if (awaiting_map_ && prev_ && local_map_search_.TrackedPoseAt(prev_->id)) awaiting_map_ = false;
   // The last keyframe the estimator tracked: what a lost frame is relocalised against.
   if (keyframe_ && prev_ && keyframe_->id == prev_->id && local_map_search_.has_map() &&
@@ -551,7 +553,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   if (!stereo || options_.local_map.stereo) {
     local_map_search_.Remember(cur.id, cur.detection, cur.landmark, cur.track_length);
   }
-  relocalised_prev_ = relocalised;
+  relocalised_prev_ = relocalised_prev_ || relocalised;
   if (out.is_keyframe) {
     keyframe_ = cur;
     frames_since_keyframe_ = 0;

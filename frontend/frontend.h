@@ -167,8 +167,9 @@ class Frontend {
   double path_length_m_ = 0.0;  // Dead-reckoned distance travelled.
   int64_t next_landmark_ = 0;
   int frames_since_keyframe_ = 0;
-  // The previous frame was relocalised from the database: once the estimator has placed it, the
-  // dead reckoning continues from the estimator's pose instead of the extrapolation of the gap.
+  // A frame was relocalised from the database: once the estimator has placed a frame, the
+  // stereo dead reckoning continues from the estimator's pose instead of the extrapolation of
+  // the gap.
   bool relocalised_prev_ = false;
   // UseMap: no frame tracked in the saved map yet.
   bool awaiting_map_ = false;

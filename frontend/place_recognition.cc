@@ -27,6 +27,9 @@ bool PlaceRecognitionOptions::IsValid(std::string* why) const {
   };
   if (thumbnail_width < 4 || thumbnail_height < 4)
     return fail("loop.thumbnail_width and loop.thumbnail_height must be >= 4");
+  if (thumbnail_width > static_cast<int>(kMaxThumbnailSide) ||
+      thumbnail_height > static_cast<int>(kMaxThumbnailSide))
+    return fail("loop.thumbnail_width and loop.thumbnail_height must be <= 1024 (a saved map's limit)");
   if (max_shift_x < 0 || max_shift_y < 0 || 2 * max_shift_x >= thumbnail_width ||
       2 * max_shift_y >= thumbnail_height)
     return fail("loop.max_shift_x/y must be >= 0 and less than half the thumbnail size");

@@ -126,8 +126,16 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
       }
     }
   }
-  if (map.thumbnail_width < 0 || map.thumbnail_height < 0) {
-    throw Error() << path << ": negative thumbnail size";
+  // The reader's limits: a map this writes must read back.
+  if (map.descriptor_size > static_cast<int>(kMaxDescriptorSize)) {
+    throw Error() << path << ": descriptor size " << map.descriptor_size << " above "
+                  << kMaxDescriptorSize;
+  }
+  if (map.thumbnail_width < 0 || map.thumbnail_height < 0 ||
+      map.thumbnail_width > static_cast<int>(kMaxThumbnailSide) ||
+      map.thumbnail_height > static_cast<int>(kMaxThumbnailSide)) {
+    throw Error() << path << ": thumbnail size " << map.thumbnail_width << "x"
+                  << map.thumbnail_height << " outside 0.." << kMaxThumbnailSide;
   }
   const size_t thumbnail_size = static_cast<size_t>(map.thumbnail_width) * map.thumbnail_height;
   for (const SavedKeyframe& kf : map.keyframes) {
@@ -211,7 +219,7 @@ SavedMap ReadMapFile(const std::string& path) {
     r.Get<uint32_t>("the version");
     // Checked while unsigned: 0xFFFFFFFF cast to int is -1, which passed a signed check.
     const uint32_t descriptor_size = r.Get<uint32_t>("the descriptor size");
-    if (descriptor_size > 4096) {
+    if (descriptor_size > kMaxDescriptorSize) {
       throw Error() << path << ": implausible descriptor size " << descriptor_size;
     }
     map.descriptor_size = static_cast<int>(descriptor_size);
@@ -247,7 +255,7 @@ SavedMap ReadMapFile(const std::string& path) {
     // Checked while unsigned, each and their product against the bytes left.
     const uint32_t width = r.Get<uint32_t>("the thumbnail size");
     const uint32_t height = r.Get<uint32_t>("the thumbnail size");
-    if (width > 1024 || height > 1024) {
+    if (width > kMaxThumbnailSide || height > kMaxThumbnailSide) {
       throw Error() << path << ": implausible thumbnail size " << width << "x" << height;
     }
     const size_t thumbnail_bytes = sizeof(float) * static_cast<size_t>(width) * height;

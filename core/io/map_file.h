@@ -7,7 +7,7 @@
 //
 // Binary format, version 2 (little-endian, IEEE floats; docs/api.md gives the same table):
 //   char[8]  magic "DALAMAP\0"
-//   uint32   version (1)
+//   uint32   version (2)
 //   uint32   descriptor_size D (floats per descriptor; 0 when the map has none)
 //   uint64   keyframe count, then per keyframe:
 //              int64 frame id, int64 t_ns, float64[7] T_w_c as (qx qy qz qw tx ty tz),
@@ -40,6 +40,9 @@ namespace dala {
 struct MapFileVersion {
   static constexpr uint32_t kCurrent = 2;
 };
+// What the reader accepts (and the writer refuses beyond): floats per descriptor, thumbnail side.
+constexpr uint32_t kMaxDescriptorSize = 4096;
+constexpr uint32_t kMaxThumbnailSide = 1024;
 
 struct SavedKeyframePoint {
   LandmarkId landmark;  // Invalid when the point belongs to no landmark.

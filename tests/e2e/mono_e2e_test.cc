@@ -2,10 +2,10 @@
 // sequences with exact ground truth (left images only) and on the real KITTI 06 frames 0-50
 // (../shared/data), evaluated after a Sim(3) alignment (the scale of one camera is free); and
 // the relocalisation after lost frames in mono and in stereo.
-#include <glog/logging.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <map>
 
 #include "backend/system.h"
@@ -254,16 +254,22 @@ GapRun RunSmallLoopGap(const SystemOptions& options) {
                         options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3);
   std::map<int64_t, Eigen::Vector3d> t_at;
   for (const StampedPose& p : out.run.trajectory.poses) t_at[p.t_ns] = p.T_w_c.translation();
-  const auto at = [&](size_t i) -> const Eigen::Vector3d& {
+  bool complete = true;
+  const auto at = [&](size_t i) -> Eigen::Vector3d {
     const auto it = t_at.find(seq.t_ns(i));
-    CHECK(it != t_at.end()) << "frame " << i << " has no pose";
-    return it->second;
+    if (it != t_at.end()) return it->second;
+    complete = false;
+    return Eigen::Vector3d::Zero();
   };
   const double scale = (at(60) - at(10)).norm() /
                        (seq.T_w_c0(60).translation() - seq.T_w_c0(10).translation()).norm();
   double sum = 0.0;
   for (size_t k = 0; k < 50; ++k) sum += (at(510 + k) - at(10 + k)).norm();
   out.offset_m = sum / 50.0 / scale;
+  if (!complete) {
+    ADD_FAILURE() << "a frame among 10-60 or 510-559 has no pose";
+    out.offset_m = std::numeric_limits<double>::infinity();
+  }
   return out;
 }
 
