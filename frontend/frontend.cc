@@ -403,7 +403,10 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     cur.detection = DetectHarris(frame.left, options_.harris);
     detection_worker_.Wait();
   } else {
-    cur.detection = DetectHarris(frame.left, options_.harris);
+    // One camera: the worker helps with the left image's pyramid levels and descriptors.
+    WorkerThread* helper =
+        !stereo && options_.parallel_detection ? &detection_worker_ : nullptr;
+    cur.detection = DetectHarris(frame.left, options_.harris, helper);
     if (stereo) right = DetectHarris(frame.right, options_.harris);
   }
   const size_t n = cur.detection.points.size();

@@ -1,5 +1,7 @@
 #include "frontend/harris.h"
 
+#include "frontend/worker_thread.h"
+
 #include <glog/logging.h>
 
 #include <algorithm>
@@ -490,7 +492,8 @@ bool SamplePatch(const DetectedImage& image, const Eigen::Vector2d& uv, double o
   return true;
 }
 
-DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options) {
+DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options,
+                           WorkerThread* helper) {
   std::string why;
   CHECK(options.IsValid(&why)) << "Invalid HarrisOptions: " << why;
   CHECK(!gray.empty() && gray.type() == CV_8UC1) << "DetectHarris needs a CV_8UC1 image";
@@ -499,8 +502,9 @@ DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options) {
   result.patch_size = options.patch_size;
   result.patch_spacing = options.patch_spacing;
 
-  // Levels: cascaded area resizing by scale_factor (AreaResize, float); with the default
-  // sqrt(2), level l >= 2 is cv::pyrDown of level l - 2 instead (exact factor 2, cheaper still).
+  // 1. The pyramid's grey levels and their geometry (cheap, in order). Levels: cascaded area
+  // resizing by scale_factor (AreaResize, float); with the default sqrt(2), level l >= 2 is
+  // cv::pyrDown of level l - 2 instead (exact factor 2, cheaper still).
   const bool sqrt2 = std::abs(options.scale_factor * options.scale_factor - 2.0) < 1e-6;
   std::vector<cv::Mat> levels;
   for (int l = 0; l < options.num_levels; ++l) {
@@ -516,7 +520,7 @@ DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options) {
       thread_local std::vector<cv::Mat> resized;  // Scratch per level.
       if (static_cast<int>(resized.size()) <= l) resized.resize(l + 1);
       AreaResize(prev, size, &resized[l]);
-      level_grey = resized[l];
+      level_grey = resized[l];  // This thread's scratch: only read until DetectHarris returns.
     }
     if (level_grey.cols < 4 * options.border || level_grey.rows < 4 * options.border) break;
     levels.push_back(level_grey);
@@ -536,14 +540,35 @@ DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options) {
       level.offset_x = src.scale_x * bx + src.offset_x;
       level.offset_y = src.scale_y * by + src.offset_y;
     }
+    result.pyramid.push_back(std::move(level));
+  }
+
+  // 2. Per level: smoothing and detection. With a helper thread, level 0 (about two thirds of
+  // the work) here and the coarser levels there; each level's points are kept apart and joined
+  // in level order, so the result is the same as one after the other, bit for bit.
+  const int num_levels = static_cast<int>(levels.size());
+  std::vector<std::vector<InterestPoint>> level_points(num_levels);
+  const auto detect_levels = [&](int first, int last) {
     // 8-bit or float in, float out: the separable filter converts while it smooths.
     const cv::Mat kernel_d =
         cv::getGaussianKernel(KernelSide(options.sigma_d), options.sigma_d, CV_32F);
-    level.smoothed = RecycledImage(level_grey.size());
-    cv::sepFilter2D(level_grey, level.smoothed, CV_32F, kernel_d, kernel_d, cv::Point(-1, -1), 0.0,
-                    cv::BORDER_REFLECT_101);
-    DetectLevel(level.smoothed, level, l, options, &result.points);
-    result.pyramid.push_back(std::move(level));
+    for (int l = first; l < last; ++l) {
+      PyramidLevel& level = result.pyramid[l];
+      level.smoothed = RecycledImage(levels[l].size());
+      cv::sepFilter2D(levels[l], level.smoothed, CV_32F, kernel_d, kernel_d, cv::Point(-1, -1),
+                      0.0, cv::BORDER_REFLECT_101);
+      DetectLevel(level.smoothed, level, l, options, &level_points[l]);
+    }
+  };
+  if (helper != nullptr && num_levels > 1) {
+    helper->Start([&] { detect_levels(1, num_levels); });
+    detect_levels(0, 1);
+    helper->Wait();
+  } else {
+    detect_levels(0, num_levels);
+  }
+  for (std::vector<InterestPoint>& points : level_points) {
+    result.points.insert(result.points.end(), points.begin(), points.end());
   }
   if (static_cast<int>(result.points.size()) > options.max_points) {
     // Cornerness grows like scale^4 across levels (gradients per level pixel); compare the
@@ -556,11 +581,22 @@ DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options) {
     result.points.resize(options.max_points);
   }
 
+  // 3. Descriptors (each row independent of the others: halves on the two threads).
   const int n = options.patch_size * options.patch_size;
-  result.descriptors.create(static_cast<int>(result.points.size()), n, CV_32F);
-  for (size_t i = 0; i < result.points.size(); ++i) {
-    const InterestPoint& p = result.points[i];
-    SamplePatch(result, p.uv, p.orientation, p.scale, result.descriptors.ptr<float>(i));
+  const int num_points = static_cast<int>(result.points.size());
+  result.descriptors.create(num_points, n, CV_32F);
+  const auto describe = [&](int first, int last) {
+    for (int i = first; i < last; ++i) {
+      const InterestPoint& p = result.points[i];
+      SamplePatch(result, p.uv, p.orientation, p.scale, result.descriptors.ptr<float>(i));
+    }
+  };
+  if (helper != nullptr && num_points > 1) {
+    helper->Start([&] { describe(num_points / 2, num_points); });
+    describe(0, num_points / 2);
+    helper->Wait();
+  } else {
+    describe(0, num_points);
   }
   return result;
 }

@@ -89,9 +89,14 @@ struct DetectedImage {
   std::shared_ptr<NeighbourCache> neighbour_cache = std::make_shared<NeighbourCache>();
 };
 
+class WorkerThread;
+
 // Detects interest points on an 8-bit grey image (CV_8UC1). CHECK-fails on invalid options or an
-// image of another type (callers validate at their I/O boundary).
-DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options);
+// image of another type (callers validate at their I/O boundary). With an idle `helper` thread
+// the pyramid levels and the descriptors are split between it and the caller (one camera: the
+// second core is otherwise idle during detection); the result is the same, bit for bit.
+DetectedImage DetectHarris(const cv::Mat& gray, const HarrisOptions& options,
+                           WorkerThread* helper = nullptr);
 
 // Samples the normalised patch of `image` centred at level-0 pixel `uv`, rotated by `orientation`
 // and of scale `scale` (level-0 pixels per patch unit spacing / patch_spacing), from the pyramid

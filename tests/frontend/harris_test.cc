@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "frontend/spatial_grid.h"
+#include "frontend/worker_thread.h"
 #include "tests/frontend/test_images.h"
 #include "tests/test_util.h"
 
@@ -190,6 +191,37 @@ TEST(HarrisTest, Deterministic) {
     EXPECT_EQ(a.points[i].orientation, b.points[i].orientation);
   }
   EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_INF), 0.0);
+}
+
+// With a helper thread (one camera's idle core) the levels and descriptors are split between
+// two threads: the same points, attributes, descriptors and pyramid, bit for bit, with one, two
+// or four levels and over repeated calls (the per-thread scratch buffers are reused).
+TEST(HarrisTest, HelperThreadGivesTheSameResult) {
+  WorkerThread helper;
+  for (const int levels : {1, 2, 4}) {
+    HarrisOptions options;
+    options.num_levels = levels;
+    for (const int seed : {9, 10}) {
+      const cv::Mat img = MakeTexturedImage(320, 240, seed);
+      const DetectedImage a = DetectHarris(img, options);
+      const DetectedImage b = DetectHarris(img, options, &helper);
+      ASSERT_EQ(a.points.size(), b.points.size()) << levels;
+      ASSERT_GT(a.points.size(), 50u);
+      for (size_t i = 0; i < a.points.size(); ++i) {
+        EXPECT_EQ(a.points[i].uv, b.points[i].uv);
+        EXPECT_EQ(a.points[i].orientation, b.points[i].orientation);
+        EXPECT_EQ(a.points[i].scale, b.points[i].scale);
+        EXPECT_EQ(a.points[i].cornerness, b.points[i].cornerness);
+      }
+      EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_INF), 0.0);
+      ASSERT_EQ(a.pyramid.size(), b.pyramid.size());
+      for (size_t l = 0; l < a.pyramid.size(); ++l) {
+        EXPECT_EQ(cv::norm(a.pyramid[l].smoothed, b.pyramid[l].smoothed, cv::NORM_INF), 0.0);
+        EXPECT_EQ(a.pyramid[l].scale_x, b.pyramid[l].scale_x);
+        EXPECT_EQ(a.pyramid[l].offset_y, b.pyramid[l].offset_y);
+      }
+    }
+  }
 }
 
 TEST(HarrisTest, OrientationFollowsAnExactRotation) {
