@@ -1,5 +1,7 @@
 #include "core/geometry.h"
 
+#include <Eigen/SVD>
+
 #include <cmath>
 
 namespace dala {
@@ -155,6 +157,13 @@ Pose InterpolatePose(const Pose& T0, const Pose& T1, double s) {
 
 Pose Orthonormalized(const Pose& T) {
   return MakePose(Eigen::Quaterniond(T.linear()).normalized(), T.translation());
+}
+
+Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& M) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  return svd.matrixU() * D * svd.matrixV().transpose();
 }
 
 }  // namespace dala

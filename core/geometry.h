@@ -56,7 +56,14 @@ Pose MakePose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
 Pose InterpolatePose(const Pose& T0, const Pose& T1, double s);
 
 // Makes the rotation block of a nearly-orthonormal pose exactly orthonormal (via quaternion).
+// Cheap, for poses that drift by repeated products; not the nearest rotation (see below).
 Pose Orthonormalized(const Pose& T);
+
+// The rotation nearest to M in the Frobenius norm (orthogonal polar factor, through the SVD;
+// det +1). For M = R (I + S) with S symmetric and small it is exactly R, so rounding errors of the
+// diagonal of a rotation read from text do not leak into its angle, as they do through a
+// quaternion (Orthonormalized shifts the angle by ~|S|, e.g. 1e-7 rad for 7-digit files).
+Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& M);
 
 }  // namespace dala
 

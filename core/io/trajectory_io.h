@@ -23,7 +23,8 @@ TrajectoryFormat DetectTrajectoryFormat(const std::string& path);
 // Reads a trajectory. Throws dala::Error naming the file and line on: a missing file, a line with
 // the wrong number of columns or a non-number, a non-unit or zero quaternion, a rotation that is
 // not orthonormal, timestamps that do not increase, an empty file. For KITTI, row i gets
-// t_ns = i * 1e9 and has_timestamps = false (see ApplyTimes).
+// t_ns = i * 1e9 and has_timestamps = false (see ApplyTimes), and its 3x3 block is replaced by the
+// nearest rotation (NearestRotation); TUM and EuRoC quaternions are normalized.
 Trajectory ReadTrajectory(const std::string& path,
                           TrajectoryFormat format = TrajectoryFormat::kAuto);
 

@@ -150,5 +150,27 @@ TEST_F(GeometryTest, OrthonormalizedFixesDrift) {
   EXPECT_LT((F.linear().transpose() * F.linear() - Eigen::Matrix3d::Identity()).norm(), 1e-12);
 }
 
+// R (I + S) with S symmetric (a rounded diagonal, as in a 7-digit KITTI file) has the polar factor
+// R exactly; a quaternion round trip (Orthonormalized) moves the angle by ~|S|.
+TEST_F(GeometryTest, NearestRotationUndoesASymmetricPerturbation) {
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Matrix3d R = testing::RandomPose(rng_).linear();
+    const Eigen::Vector3d d = RandomVector(3e-7);
+    Eigen::Matrix3d S = d.asDiagonal();
+    S(0, 1) = S(1, 0) = 1e-7;
+    const Eigen::Matrix3d M = R * (Eigen::Matrix3d::Identity() + S);
+    const Eigen::Matrix3d N = NearestRotation(M);
+    EXPECT_LT((N.transpose() * N - Eigen::Matrix3d::Identity()).norm(), 1e-14);
+    EXPECT_NEAR(N.determinant(), 1.0, 1e-14);
+    EXPECT_LT(LogSO3(R.transpose() * N).norm(), 1e-14);
+    // The quaternion path is off by the size of the perturbation.
+    EXPECT_GT(LogSO3(R.transpose() * Orthonormalized(MakePose(M, Eigen::Vector3d::Zero())).linear())
+                  .norm(),
+              1e-9);
+  }
+  // A reflection-like input still gives a proper rotation.
+  EXPECT_NEAR(NearestRotation(Eigen::Vector3d(1, 1, -1).asDiagonal()).determinant(), 1.0, 1e-14);
+}
+
 }  // namespace
 }  // namespace dala

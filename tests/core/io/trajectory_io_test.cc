@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
 #include <random>
 
@@ -118,6 +119,24 @@ TEST(TrajectoryIo, KittiRejectsNonRotation) {
   testing::TempDir dir;
   WriteText(dir / "k.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n");
   EXPECT_THROW(ReadTrajectory(dir / "k.txt"), Error);
+}
+
+// A KITTI row keeps ~7 digits: the diagonal rounding (a symmetric perturbation R (I + S)) must not
+// move the rotation read, which is the nearest rotation, exactly R here. (The former quaternion
+// round trip moved it by ~1e-7 rad and the KITTI 00 RPE rotation median by 1.4e-5 relative.)
+TEST(TrajectoryIo, KittiRotationIsTheNearestRotation) {
+  testing::TempDir dir;
+  const Eigen::Matrix3d R = ExpSO3(Eigen::Vector3d(0.3, -0.8, 1.1));
+  const Eigen::Matrix3d S = Eigen::Vector3d(4e-7, -3e-7, 2e-7).asDiagonal();
+  const Eigen::Matrix3d M = R * (Eigen::Matrix3d::Identity() + S);
+  char row[512];
+  std::snprintf(row, sizeof(row), "%.17g %.17g %.17g 1 %.17g %.17g %.17g 2 %.17g %.17g %.17g 3\n",
+                M(0, 0), M(0, 1), M(0, 2), M(1, 0), M(1, 1), M(1, 2), M(2, 0), M(2, 1), M(2, 2));
+  WriteText(dir / "k.txt", row);
+  const Trajectory t = ReadTrajectory(dir / "k.txt");
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_LT(LogSO3(R.transpose() * t.poses[0].T_w_c.linear()).norm(), 1e-14);
+  EXPECT_EQ(t.poses[0].T_w_c.translation(), Eigen::Vector3d(1, 2, 3));
 }
 
 TEST(TrajectoryIo, WriterIsAtomicOnFailure) {
