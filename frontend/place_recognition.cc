@@ -346,21 +346,31 @@ std::optional<PlaceMatch> PlaceRecognition::VerifyCandidates(
   return std::nullopt;
 }
 
+std::optional<PlaceMatch> PlaceRecognition::Search(
+    const KeyframeEntry& query, const DetectedImage& detection,
+    const std::vector<std::optional<StereoPoint>>& stereo,
+    const std::vector<LandmarkId>& landmark, bool relocalisation) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::optional<PlaceMatch> found =
+      VerifyCandidates(RankCandidates(query, relocalisation), query, detection, stereo, landmark,
+                       /*gate=*/!relocalisation);
+  stats_.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return found;
+}
+
 std::optional<PlaceMatch> PlaceRecognition::Detect(
     const KeyframeEntry& query, const DetectedImage& detection,
     const std::vector<std::optional<StereoPoint>>& stereo,
     const std::vector<LandmarkId>& landmark) {
-  const auto t0 = std::chrono::steady_clock::now();
   stats_ = PlaceRecognitionStats();
-  std::optional<PlaceMatch> found;
   ++keyframes_since_loop_;
-  if (options_.enable && keyframes_since_loop_ > options_.keyframes_between_loops) {
-    found = VerifyCandidates(RankCandidates(query, /*relocalisation=*/false), query, detection,
-                             stereo, landmark, /*gate=*/true);
-    if (found) keyframes_since_loop_ = 0;
+  if (!options_.enable || keyframes_since_loop_ <= options_.keyframes_between_loops) {
+    return std::nullopt;
   }
-  stats_.ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::optional<PlaceMatch> found =
+      Search(query, detection, stereo, landmark, /*relocalisation=*/false);
+  if (found) keyframes_since_loop_ = 0;
   return found;
 }
 
@@ -368,16 +378,9 @@ std::optional<PlaceMatch> PlaceRecognition::Relocalize(
     const KeyframeEntry& query, const DetectedImage& detection,
     const std::vector<std::optional<StereoPoint>>& stereo,
     const std::vector<LandmarkId>& landmark) {
-  const auto t0 = std::chrono::steady_clock::now();
   stats_ = PlaceRecognitionStats();
-  std::optional<PlaceMatch> found;
-  if (options_.relocalise) {
-    found = VerifyCandidates(RankCandidates(query, /*relocalisation=*/true), query, detection,
-                             stereo, landmark, /*gate=*/false);
-  }
-  stats_.ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return found;
+  if (!options_.relocalise) return std::nullopt;
+  return Search(query, detection, stereo, landmark, /*relocalisation=*/true);
 }
 
 }  // namespace dala

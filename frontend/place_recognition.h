@@ -195,6 +195,11 @@ class PlaceRecognition {
   // A relocalisation also ranks the saved map's keyframes.
   std::vector<std::pair<double, const KeyframeEntry*>> RankCandidates(const KeyframeEntry& query,
                                                                       bool relocalisation);
+  // Ranks and verifies (RankCandidates, VerifyCandidates; the gate unless `relocalisation`),
+  // timing the search into stats_.ms.
+  std::optional<PlaceMatch> Search(const KeyframeEntry& query, const DetectedImage& detection,
+                                   const std::vector<std::optional<StereoPoint>>& stereo,
+                                   const std::vector<LandmarkId>& landmark, bool relocalisation);
   // Verifies the ranked candidates in order; the first verified one.
   std::optional<PlaceMatch> VerifyCandidates(
       const std::vector<std::pair<double, const KeyframeEntry*>>& ranked,
