@@ -5,10 +5,12 @@
 #   scripts/run_fuzzers.sh [seconds_per_target] [target...]     (default 60 s, every target)
 #
 # Environment: BUILD_DIR (default build-fuzz), JOBS (compile jobs, default 1), CXX (default
-# clang++). Each target starts from its seed corpus tests/fuzz/corpus/<target>/ and adds what it
-# finds to BUILD_DIR/corpus/<target>/ (not in the repo: copy only small, new-coverage inputs
-# back). A crash, leak, timeout or out-of-memory input is written to BUILD_DIR/findings/<target>/;
-# reproduce it with `BUILD_DIR/tests/fuzz/<target> FILE`. Exit status 1 when any target found one.
+# clang++), NO_BUILD=1 (skip configure and build: run the targets already built, e.g. two
+# invocations with different targets sharing BUILD_DIR, one per core). Each target starts from
+# its seed corpus tests/fuzz/corpus/<target>/ and adds what it finds to BUILD_DIR/corpus/<target>/
+# (not in the repo: copy only small, new-coverage inputs back). A crash, leak, timeout or
+# out-of-memory input is written to BUILD_DIR/findings/<target>/; reproduce it with
+# `BUILD_DIR/tests/fuzz/<target> FILE`. Exit status 1 when any target found one.
 set -euo pipefail
 
 seconds=${1:-60}
@@ -18,10 +20,12 @@ build=${BUILD_DIR:-$root/build-fuzz}
 jobs=${JOBS:-1}
 
 mkdir -p "$build"
-cmake -S "$root" -B "$build" -DDALA_FUZZ=ON -DCMAKE_CXX_COMPILER="${CXX:-clang++}" \
-      -DCMAKE_BUILD_TYPE=Fuzz > "$build/configure.log" 2>&1 ||
-  { cat "$build/configure.log"; exit 2; }
-cmake --build "$build" -j "$jobs"
+if [ "${NO_BUILD:-0}" != 1 ]; then
+  cmake -S "$root" -B "$build" -DDALA_FUZZ=ON -DCMAKE_CXX_COMPILER="${CXX:-clang++}" \
+        -DCMAKE_BUILD_TYPE=Fuzz > "$build/configure.log" 2>&1 ||
+    { cat "$build/configure.log"; exit 2; }
+  cmake --build "$build" -j "$jobs"
+fi
 
 if [ $# -gt 0 ]; then
   targets=("$@")
