@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/yaml_single_document.h"
 
 namespace dala {
 namespace {
@@ -215,6 +216,7 @@ ConfigNode LoadConfigFile(const std::string& path) {
 ConfigNode ParseConfigString(const std::string& yaml, const std::string& name) {
   auto shared = std::make_shared<ConfigNode::Shared>();
   shared->file = name;
+  CheckSingleYamlDocument(yaml, name);  // OpenCV's parser would hang on what follows a document.
   try {
     // cv::FileStorage recognises YAML text only by its "%YAML:1.0" header; add it when absent
     // (OpenCV's line numbers in parse errors then count it as line 1).

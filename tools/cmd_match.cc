@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/yaml_single_document.h"
 #include "frontend/harris.h"
 #include "frontend/matcher.h"
 #include "tools/command.h"
@@ -73,6 +74,8 @@ cv::Mat ReadHomography(const std::string& path) {
       return H;
     }
   }
+  // OpenCV's YAML parser can hang on a second document (core/yaml_single_document.h).
+  if (text.rfind("%YAML", 0) == 0) CheckSingleYamlDocument(text, path);
   cv::Mat H;
   try {
     cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);

@@ -3,7 +3,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <fstream>
+#include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/error.h"
 #include "tests/test_util.h"
@@ -156,6 +163,54 @@ TEST(Config, MissingAndInvalidFiles) {
     os << "%YAML:1.0\n- 1\n- 2\n";
   }
   EXPECT_THAT(ErrorOf([&] { LoadConfigFile(dir / "seq.yaml"); }), HasSubstr("must be a map"));
+}
+
+
+// Found by bench_suite_fuzzer: once the first document's root ends before the end of the text,
+// OpenCV 4.6's parser looks for a second document and loops forever on a '-' that does not start
+// "---" (core/yaml_single_document.h). Each text runs in a child process with an alarm, so a hang
+// fails the test instead of stalling the suite.
+TEST(ConfigDeathTest, TextAfterTheFirstDocumentIsAnErrorNotAHang) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {" L:0\n-:\n-", "line 2: indented by 0 where the document (line 1) is indented by 1"},
+      {"a: 1\n...\n-\n", "line 3: text after the end of the document on line 2"},
+      {"a: 1\n---\n-\n", "line 3: text after the end of the document on line 2"},
+      {"a: 1\n... -\n", "line 2: text after a document marker"},
+      {"  a: 1\n  b: 2\nc: 3\n-\n", "line 3: indented by 0"},
+  };
+  for (const auto& [text, expected] : cases) {
+    EXPECT_EXIT(
+        {
+          alarm(20);
+          try {
+            ParseConfigString(text, "suite.yaml");
+          } catch (const Error& e) {
+            const std::string what = e.what();
+            const bool ok = what.find("suite.yaml: " + expected) != std::string::npos &&
+                            what.find("one YAML document per file") != std::string::npos;
+            if (!ok) std::cerr << what;
+            std::_Exit(ok ? 0 : 2);
+          }
+          std::_Exit(3);
+        },
+        ::testing::ExitedWithCode(0), "")
+        << text;
+  }
+}
+
+TEST(Config, SingleDocumentsInEveryLayoutStillParse) {
+  const std::vector<std::string> texts = {
+      "%YAML:1.0\n---\na: 1\nb: [1,\n  2]\n",                      // Header, marker, flow value.
+      "# comment\n  a: 1\n# comment at column 0\n  b: 2\n",         // Indented root.
+      "a: 1\nb:\n  c: 2\n...\n\n# trailing comment\n",               // Explicit end, nothing after.
+      "b: \"#}\"\na: 1\r\n",                                          // Quotes and CRLF.
+  };
+  for (const std::string& text : texts) {
+    int a = 0;
+    EXPECT_NO_THROW(ParseConfigString(text, "ok.yaml").Read("a", &a)) << text;
+    EXPECT_EQ(a, 1) << text;
+  }
 }
 
 }  // namespace
