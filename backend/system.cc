@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <unordered_set>
 
 #include "backend/ekf/mono_ekf.h"
 #include "backend/ekf/stereo_ekf.h"
@@ -76,6 +77,10 @@ TrackResult System::Track(const Frame& frame) {
   }
   T_w_odom_prev_ = frame.T_w_odom;
   const auto t1 = Clock::now();
+  // Here, where Add would wait for a background window solve anyway (map() waits for it too).
+  if (keyframe_records_.size() >= pruned_records_ + kRecordPruneAge + kRecordPruneEvery) {
+    PruneKeyframeRecords();
+  }
   EstimatorOutput e = estimator_->Add(m);
   const LocalMapSearchOptions& search = options_.frontend.local_map;
   // Stereo runs get it too, for the relocalisation after a lost frame; their guided search and
@@ -158,6 +163,23 @@ void System::RecordKeyframe(const cv::Mat& left) {
   keyframe_has_pose_.push_back(false);
 }
 
+void System::PruneKeyframeRecords() const {
+  if (keyframe_records_.size() <= pruned_records_ + kRecordPruneAge) return;
+  std::unordered_set<int64_t> mapped;
+  for (const MapPoint& p : estimator_->map()) mapped.insert(p.id.value);
+  const size_t end = keyframe_records_.size() - kRecordPruneAge;
+  for (size_t k = pruned_records_; k < end; ++k) {
+    std::vector<SavedKeyframePoint>& points = keyframe_records_[k].points;
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&mapped](const SavedKeyframePoint& p) {
+                                  return mapped.count(p.landmark.value) == 0;
+                                }),
+                 points.end());
+    points.shrink_to_fit();
+  }
+  pruned_records_ = end;
+}
+
 void System::RefreshKeyframePoses() const {
   // The trajectory leaves out the frames without a pose (mono before its initialisation):
   // match by time.
@@ -175,6 +197,7 @@ void System::RefreshKeyframePoses() const {
 }
 
 std::vector<SavedKeyframe> System::keyframes() const {
+  PruneKeyframeRecords();
   RefreshKeyframePoses();
   std::vector<SavedKeyframe> out;
   for (size_t k = 0; k < keyframe_records_.size(); ++k) {
@@ -221,6 +244,7 @@ SavedMap System::MapSnapshot() const {
 }
 
 void System::SaveMap(const std::string& path) const {
+  PruneKeyframeRecords();
   RefreshKeyframePoses();
   SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map(), options_,
                                      ScaleDescription().rfind("metric", 0) == 0);
