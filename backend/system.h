@@ -81,8 +81,9 @@ class System {
   Trajectory trajectory() const { return estimator_->trajectory(); }
   std::vector<MapPoint> map() const { return estimator_->map(); }
   // Every keyframe so far (the frames the frontend chose), in order, with its current pose
-  // (corrected by later optimisation) and its points that belong to a landmark: position,
-  // orientation, scale and patch descriptor (frontend/harris.h).
+  // (corrected by later optimisation) and its points that belong to a landmark (older than
+  // kRecordPruneAge keyframes: to a landmark of the map): position, orientation, scale and
+  // patch descriptor (frontend/harris.h).
   std::vector<SavedKeyframe> keyframes() const;
   const std::vector<FrameStats>& stats() const { return stats_; }
 
@@ -110,8 +111,9 @@ class System {
   std::string ScaleDescription() const;
   const Estimator& estimator() const { return *estimator_; }
 
-  // The saved keyframes (keyframes(), SaveMap) older than kRecordPruneAge keyframes keep only their points whose landmark is in the
-  // estimator's map (PruneKeyframeRecords, every kRecordPruneEvery keyframes and before a save).
+  // The saved keyframes (keyframes(), SaveMap) older than kRecordPruneAge keyframes keep only
+  // their points whose landmark is in the estimator's map (PruneKeyframeRecords, every
+  // kRecordPruneEvery keyframes and before a save).
   // Why: a point whose landmark never entered the map (a stereo point seen by one keyframe, a
   // track the BA rejected, an EKF landmark evicted) has no position in the saved map, so a run
   // relocalising in it cannot use the point (PnP needs the landmark, place recognition ranks by
