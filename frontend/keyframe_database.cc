@@ -14,6 +14,11 @@ void KeyframeDatabase::Add(KeyframeEntry entry) {
   CHECK_EQ(entry.points.points.size(), n) << "one point per landmark id";
   CHECK_EQ(entry.stereo.size(), n) << "one stereo point per landmark id";
   CHECK_EQ(static_cast<size_t>(entry.points.descriptors.rows), n) << "one descriptor per point";
+  // The vectors were grown by push_back (up to twice the memory they need); entries live for the
+  // whole run.
+  entry.points.points.shrink_to_fit();
+  entry.landmark.shrink_to_fit();
+  entry.stereo.shrink_to_fit();
   entries_.push_back(std::move(entry));
 }
 

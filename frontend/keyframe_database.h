@@ -16,6 +16,7 @@
 // Not thread-safe.
 
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <vector>
 
@@ -53,7 +54,7 @@ class KeyframeDatabase {
   // per-point vectors have one element per point).
   void Add(KeyframeEntry entry);
 
-  const std::vector<KeyframeEntry>& entries() const { return entries_; }
+  const std::deque<KeyframeEntry>& entries() const { return entries_; }
   size_t size() const { return entries_.size(); }
   bool empty() const { return entries_.empty(); }
   // nullptr when `frame` is not a keyframe of the database.
@@ -61,7 +62,12 @@ class KeyframeDatabase {
   void Clear() { entries_.clear(); }
 
  private:
-  std::vector<KeyframeEntry> entries_;
+  // A deque, not a vector: an entry cannot be moved without a copy (cv::Mat's move constructor
+  // is not noexcept in OpenCV 4.6, so std::vector's growth would copy every entry's point
+  // vectors, ~0.1 MB each, at each doubling: steps of 15-100 MB of heap and a frame that copies
+  // them, seen on the 3000-frame rover loop). Entries stay where they are; references to them
+  // stay valid when more are added.
+  std::deque<KeyframeEntry> entries_;
 };
 
 }  // namespace dala
