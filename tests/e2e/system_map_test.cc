@@ -1,6 +1,7 @@
 // System::keyframes / SaveMap / LoadMap on a rendered stereo stretch with exact ground truth.
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <set>
 #include <string>
 
@@ -11,17 +12,29 @@
 namespace dala {
 namespace {
 
-TEST(SystemMap, SavedMapHoldsKeyframesLandmarksAndDescriptors) {
+// The rendered rover loop (seed 11), `frames` long.
+sim::SyntheticSequence RoverLoop(int frames) {
   sim::SimOptions sim;
   sim.preset = "rover_loop";
-  sim.frames = 40;
+  sim.frames = frames;
   sim.seed = 11;
-  const sim::SyntheticSequence seq(sim);
+  return sim::SyntheticSequence(sim);
+}
+
+// Every frame of `seq` tracked by a System with `estimator` and the default options.
+std::unique_ptr<System> TrackAll(const sim::SyntheticSequence& seq, const char* estimator) {
+  SystemOptions options;
+  options.estimator = estimator;
+  auto system = std::make_unique<System>(seq.rig(), options);
+  for (size_t i = 0; i < seq.size(); ++i) system->Track(seq.Render(i));
+  return system;
+}
+
+TEST(SystemMap, SavedMapHoldsKeyframesLandmarksAndDescriptors) {
+  const sim::SyntheticSequence seq = RoverLoop(40);
   for (const char* estimator : {"ba", "ekf"}) {
-    SystemOptions options;
-    options.estimator = estimator;
-    System system(seq.rig(), options);
-    for (size_t i = 0; i < seq.size(); ++i) system.Track(seq.Render(i));
+    const std::unique_ptr<System> owned = TrackAll(seq, estimator);
+    const System& system = *owned;
 
     const std::vector<SavedKeyframe> keyframes = system.keyframes();
     ASSERT_GE(keyframes.size(), 3u) << estimator;
@@ -68,16 +81,10 @@ TEST(SystemMap, SavedMapHoldsKeyframesLandmarksAndDescriptors) {
 // others have no position a run in the saved map could use, and were 58 % of the memory the
 // records took on rover_loop.
 TEST(SystemMap, OldKeyframesKeepOnlyMappedPoints) {
-  sim::SimOptions sim;
-  sim.preset = "rover_loop";
-  sim.frames = 150;
-  sim.seed = 11;
-  const sim::SyntheticSequence seq(sim);
+  const sim::SyntheticSequence seq = RoverLoop(150);
   for (const char* estimator : {"ba", "ekf"}) {
-    SystemOptions options;
-    options.estimator = estimator;
-    System system(seq.rig(), options);
-    for (size_t i = 0; i < seq.size(); ++i) system.Track(seq.Render(i));
+    const std::unique_ptr<System> owned = TrackAll(seq, estimator);
+    const System& system = *owned;
     const std::vector<SavedKeyframe> keyframes = system.keyframes();
     ASSERT_GT(keyframes.size(), System::kRecordPruneAge + 8) << estimator;
     std::set<int64_t> mapped;
