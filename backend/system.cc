@@ -79,7 +79,7 @@ TrackResult System::Track(const Frame& frame) {
   const auto t1 = Clock::now();
   // Here, where Add would wait for a background window solve anyway (map() waits for it too).
   if (keyframe_records_.size() >= pruned_records_ + kRecordPruneAge + kRecordPruneEvery) {
-    PruneKeyframeRecords();
+    PruneKeyframeRecords(estimator_->map());
   }
   EstimatorOutput e = estimator_->Add(m);
   const LocalMapSearchOptions& search = options_.frontend.local_map;
@@ -163,10 +163,10 @@ void System::RecordKeyframe(const cv::Mat& left) {
   keyframe_has_pose_.push_back(false);
 }
 
-void System::PruneKeyframeRecords() const {
+void System::PruneKeyframeRecords(const std::vector<MapPoint>& map) const {
   if (keyframe_records_.size() <= pruned_records_ + kRecordPruneAge) return;
   std::unordered_set<int64_t> mapped;
-  for (const MapPoint& p : estimator_->map()) mapped.insert(p.id.value);
+  for (const MapPoint& p : map) mapped.insert(p.id.value);
   const size_t end = keyframe_records_.size() - kRecordPruneAge;
   for (size_t k = pruned_records_; k < end; ++k) {
     std::vector<SavedKeyframePoint>& points = keyframe_records_[k].points;
@@ -197,7 +197,7 @@ void System::RefreshKeyframePoses() const {
 }
 
 std::vector<SavedKeyframe> System::keyframes() const {
-  PruneKeyframeRecords();
+  PruneKeyframeRecords(estimator_->map());
   RefreshKeyframePoses();
   std::vector<SavedKeyframe> out;
   for (size_t k = 0; k < keyframe_records_.size(); ++k) {
@@ -244,9 +244,10 @@ SavedMap System::MapSnapshot() const {
 }
 
 void System::SaveMap(const std::string& path) const {
-  PruneKeyframeRecords();
+  const std::vector<MapPoint> points = estimator_->map();
+  PruneKeyframeRecords(points);
   RefreshKeyframePoses();
-  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map(), options_,
+  SavedMap map = MapWithoutKeyframes(keyframe_records_, points, options_,
                                      ScaleDescription().rfind("metric", 0) == 0);
   if (std::count(keyframe_has_pose_.begin(), keyframe_has_pose_.end(), false) > 0) {
     // Some keyframes have no pose (mono before its initialisation): write a copy without them.

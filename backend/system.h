@@ -141,7 +141,7 @@ class System {
   // copying ~0.5 MB of descriptors per keyframe.
   mutable std::vector<SavedKeyframe> keyframe_records_;
   mutable size_t pruned_records_ = 0;  // Records [0, pruned_records_) have been pruned.
-  void PruneKeyframeRecords() const;
+  void PruneKeyframeRecords(const std::vector<MapPoint>& map) const;  // map: estimator_->map()
   std::vector<size_t> keyframe_trajectory_index_;
   mutable std::vector<bool> keyframe_has_pose_;  // By RefreshKeyframePoses.
   void RefreshKeyframePoses() const;

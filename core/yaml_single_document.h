@@ -4,9 +4,10 @@
 // A guard in front of cv::FileStorage's YAML parser (OpenCV 4.6, Debian 12).
 //
 // OpenCV's parser reads a stream of documents. Once the first document's root collection ends
-// before the end of the text (a line indented less than the root, or a "..." marker), it skips three characters and looks for the next "---".
-// If it then meets a '-' that does not start "---", it loops forever without advancing: the
-// 9-byte text " L:0\n-:\n-" hangs every reader (found by tests/fuzz/bench_suite_fuzzer).
+// before the end of the text (a line indented less than the root, or a "..." marker), it skips
+// three characters and looks for the next "---". If it then meets a '-' that does not start
+// "---", it loops forever without advancing: the 9-byte text " L:0\n-:\n-" hangs every reader
+// (found by tests/fuzz/bench_suite_fuzzer).
 // dala's files are single documents, so the guard refuses any text that goes on after the first
 // document's root ends, naming the line, before OpenCV sees it.
 
