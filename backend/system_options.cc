@@ -125,6 +125,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "window_size", &b.ba.window_size);
   v->Field("ba", "use_marginalization", &b.ba.use_marginalization);
   v->Field("ba", "num_fixed_keyframes", &b.ba.num_fixed_keyframes);
+  v->Field("ba", "num_held_keyframes", &b.ba.num_held_keyframes);
   v->Field("ba", "min_triangulation_parallax_deg", &b.ba.min_triangulation_parallax_deg);
   // The enum as a name, both ways from one table.
   using Exit = SlidingWindowBa::LandmarkExit;

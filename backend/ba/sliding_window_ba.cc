@@ -22,6 +22,7 @@ bool SlidingWindowBa::Options::IsValid(std::string* why) const {
   };
   if (window_size < 2) return fail("window_size must be >= 2");
   if (num_fixed_keyframes < -1) return fail("num_fixed_keyframes must be >= 0 (or -1 = auto)");
+  if (num_held_keyframes < 0) return fail("num_held_keyframes must be >= 0");
   if (!(loss_scale > 0.0)) return fail("loss_scale must be > 0");
   if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
   if (!(max_solver_time_in_seconds >= 0.0)) {
@@ -46,7 +47,8 @@ bool SlidingWindowBa::Options::IsValid(std::string* why) const {
 
 std::string SlidingWindowBa::Summary::BriefReport() const {
   std::ostringstream os;
-  os << "BA: " << num_keyframes << " keyframes, " << num_landmarks << " landmarks, "
+  os << "BA: " << num_keyframes << " keyframes (+" << num_held_keyframes << " held), "
+     << num_landmarks << " landmarks, "
      << num_residual_blocks << " residual blocks, " << num_solves << " solves, " << num_iterations
      << " iterations, cost " << initial_cost << " -> " << final_cost << ", " << num_outliers_removed
      << " outliers removed, " << num_landmarks_culled << " landmarks culled, " << time_s * 1e3
@@ -109,9 +111,11 @@ void SlidingWindowBa::AddObservation(KeyframeId id, const BaObservation& obs) {
 }
 
 void SlidingWindowBa::ApplyCorrection(const std::map<KeyframeId, Pose>& T_w_kf) {
-  for (KeyframeState& kf : window_) {
-    const auto it = T_w_kf.find(kf.id);
-    if (it != T_w_kf.end()) kf.x = PoseToBlock(it->second);
+  for (auto* keyframes : {&held_, &window_}) {
+    for (KeyframeState& kf : *keyframes) {
+      const auto it = T_w_kf.find(kf.id);
+      if (it != T_w_kf.end()) kf.x = PoseToBlock(it->second);
+    }
   }
   if (!prior_.empty()) {
     prior_ = MarginalizationPrior();
@@ -199,6 +203,7 @@ void SlidingWindowBa::MarginalizeOldest() {
   KeyframeState& m = window_.front();
   marginalized_.push_back({m.id, m.t_ns, BlockToPose(m.x)});
   if (!options_.use_marginalization) {
+    Hold(std::move(m), {});
     window_.pop_front();
     return;
   }
@@ -261,6 +266,7 @@ void SlidingWindowBa::MarginalizeOldest() {
 
   // The marginalised landmarks leave the state: their observations are consumed. Their last
   // estimate stays in landmarks_ as the initial value if they are observed again.
+  Hold(std::move(m), leaving);
   window_.pop_front();
   // kMarginalizeAllKeepTracks: the tracked landmarks also keep their window observations.
   const bool keep_tracked = options_.landmark_exit == LandmarkExit::kMarginalizeAllKeepTracks;
@@ -273,6 +279,18 @@ void SlidingWindowBa::MarginalizeOldest() {
                              }),
               obs.end());
   }
+}
+
+void SlidingWindowBa::Hold(KeyframeState leaving, const std::set<LandmarkId>& consumed) {
+  if (options_.num_held_keyframes == 0) return;
+  auto& obs = leaving.observations;
+  obs.erase(std::remove_if(obs.begin(), obs.end(),
+                           [&](const BaObservation& o) { return consumed.count(o.landmark) > 0; }),
+            obs.end());
+  obs.shrink_to_fit();
+  leaving.fixed = true;
+  held_.push_back(std::move(leaving));
+  while (static_cast<int>(held_.size()) > options_.num_held_keyframes) held_.pop_front();
 }
 
 SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
@@ -302,18 +320,36 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
     const bool estimate_offset = options_.estimate_disparity_offset && K_.is_stereo();
     double offset = K_.disparity_offset_px;
     std::set<LandmarkId> active;
+    const auto add_residual = [&](KeyframeState& kf, const BaObservation& obs) {
+      double* p_w = landmarks_.at(obs.landmark).data();
+      if (estimate_offset && ResidualDof(K_, obs) == 3) {
+        problem.AddResidualBlock(CreateStereoOffsetCost(K_, obs), loss.get(), kf.x.data(), p_w,
+                                 &offset);
+      } else {
+        problem.AddResidualBlock(CreateReprojectionCost(K_, obs), loss.get(), kf.x.data(), p_w);
+      }
+    };
     for (KeyframeState& kf : window_) {
       for (const BaObservation& obs : kf.observations) {
         if (!IsActive(obs.landmark, counts)) continue;
         active.insert(obs.landmark);
-        double* p_w = landmarks_.at(obs.landmark).data();
-        if (estimate_offset && ResidualDof(K_, obs) == 3) {
-          problem.AddResidualBlock(CreateStereoOffsetCost(K_, obs), loss.get(), kf.x.data(), p_w,
-                                   &offset);
-        } else {
-          problem.AddResidualBlock(CreateReprojectionCost(K_, obs), loss.get(), kf.x.data(), p_w);
-        }
+        add_residual(kf, obs);
       }
+    }
+    // The held keyframes: constants, with their observations of the active landmarks.
+    summary.num_held_keyframes = 0;
+    for (KeyframeState& kf : held_) {
+      bool used = false;
+      for (const BaObservation& obs : kf.observations) {
+        if (!IsActive(obs.landmark, counts)) continue;
+        if (!used) {
+          problem.AddParameterBlock(kf.x.data(), 7, manifold.get());
+          problem.SetParameterBlockConstant(kf.x.data());
+          used = true;
+        }
+        add_residual(kf, obs);
+      }
+      summary.num_held_keyframes += used ? 1 : 0;
     }
     if (estimate_offset && problem.HasParameterBlock(&offset)) {
       problem.AddResidualBlock(CreateOffsetPriorCost(options_.disparity_offset_prior_sigma_px),
@@ -353,18 +389,21 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
 
     int removed = 0;
     if (options_.remove_outliers && summary.usable) {
-      for (KeyframeState& kf : window_) {
-        auto& obs = kf.observations;
-        const auto end = std::remove_if(obs.begin(), obs.end(), [&](const BaObservation& o) {
-          if (!active.count(o.landmark)) return false;
-          double depth = 0.0;
-          const double e2 =
-              WhitenedSquaredError(K_, o, kf.x.data(), landmarks_.at(o.landmark).data(), &depth);
-          const double bound = ResidualDof(K_, o) == 3 ? kChi2Quantile95Dof3 : kChi2Quantile95Dof2;
-          return e2 > bound || depth < options_.min_depth;
-        });
-        removed += static_cast<int>(obs.end() - end);
-        obs.erase(end, obs.end());
+      for (auto* keyframes : {&window_, &held_}) {
+        for (KeyframeState& kf : *keyframes) {
+          auto& obs = kf.observations;
+          const auto end = std::remove_if(obs.begin(), obs.end(), [&](const BaObservation& o) {
+            if (!active.count(o.landmark)) return false;
+            double depth = 0.0;
+            const double e2 =
+                WhitenedSquaredError(K_, o, kf.x.data(), landmarks_.at(o.landmark).data(), &depth);
+            const double bound =
+                ResidualDof(K_, o) == 3 ? kChi2Quantile95Dof3 : kChi2Quantile95Dof2;
+            return e2 > bound || depth < options_.min_depth;
+          });
+          removed += static_cast<int>(obs.end() - end);
+          obs.erase(end, obs.end());
+        }
       }
     }
     summary.num_outliers_removed += removed;
@@ -394,6 +433,12 @@ PoseOnlyResult SlidingWindowBa::TrackFrame(const std::vector<BaObservation>& obs
 std::vector<KeyframeId> SlidingWindowBa::WindowKeyframes() const {
   std::vector<KeyframeId> ids;
   for (const KeyframeState& kf : window_) ids.push_back(kf.id);
+  return ids;
+}
+
+std::vector<KeyframeId> SlidingWindowBa::HeldKeyframes() const {
+  std::vector<KeyframeId> ids;
+  for (const KeyframeState& kf : held_) ids.push_back(kf.id);
   return ids;
 }
 

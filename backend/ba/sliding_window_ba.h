@@ -25,6 +25,19 @@
 // observations then count twice). A landmark that left the state and is seen again comes back
 // as a new variable initialised at its last estimate. docs/backend.md compares the choices.
 
+// Held keyframes (Options::num_held_keyframes, ORB-SLAM's fixed keyframes of the local BA): the
+// last keyframes that left the window stay beside it as constants, with their observations of
+// landmarks that stayed in the state, so a landmark keeps the constraints of the views that
+// first saw it after they leave (the longer its track, the more of the window's scale and
+// depth it ties to poses already estimated). What a held keyframe keeps: with a prior, only its
+// observations of the landmarks that stayed in the state (the others went into the prior and
+// would count twice); without, all of them. Its pose is the estimate when it left, moved by
+// ApplyCorrection. The prior marginalised that pose (a Gaussian) while the held residuals
+// condition on its value: their information on the held pose is counted in both, which is
+// the approximation ORB-SLAM's local BA makes (docs/backend.md measures it). A held observation
+// that fails the outlier test is removed like a window one. A landmark becomes active by its
+// window observations only (min_observations), so holding keyframes changes no activation.
+
 // Gauge: in every window solve the oldest num_fixed_keyframes window keyframes are held constant
 // (default: 1 for a stereo camera, 2 for a mono one, which also fixes the scale by their
 // distance), in every mode. The first keyframes ever added are constants of the prior too; the
@@ -89,6 +102,9 @@ class SlidingWindowBa {
     // for the gauge. Shows what the prior carries.
     bool keep_prior = true;
     int num_fixed_keyframes = -1;  // gauge; -1 => 1 for stereo intrinsics, 2 for mono.
+    // Keyframes that left the window kept beside it as constants (see the class comment); 0:
+    // none.
+    int num_held_keyframes = 0;
     RobustLoss loss = RobustLoss::kHuber;
     double loss_scale = 2.45;     // on the whitened residual norm; sqrt(5.991), chi2 95% mono.
     int max_num_iterations = 10;  // per solve: the work bound.
@@ -128,6 +144,7 @@ class SlidingWindowBa {
     double time_s = 0.0;      // wall time of Optimize().
     int num_keyframes = 0;
     int num_landmarks = 0;  // optimised in the last solve.
+    int num_held_keyframes = 0;  // held keyframes with at least one residual in the last solve.
     int num_residual_blocks = 0;
     int num_outliers_removed = 0;
     int num_landmarks_culled = 0;  // dropped because no observation remained.
@@ -172,6 +189,8 @@ class SlidingWindowBa {
                             const PoseOnlyOptions& options) const;
 
   std::vector<KeyframeId> WindowKeyframes() const;
+  // The held keyframes (oldest first; see Options::num_held_keyframes).
+  std::vector<KeyframeId> HeldKeyframes() const;
   std::optional<Pose> KeyframePose(KeyframeId id) const;
   std::optional<Eigen::Vector3d> LandmarkPosition(LandmarkId id) const;
   // The rig's disparity offset as last estimated (StereoIntrinsics::disparity_offset_px; 0
@@ -193,6 +212,9 @@ class SlidingWindowBa {
   };
 
   void MarginalizeOldest();
+  // Moves the leaving keyframe into held_ with the observations that `consumed` (landmarks
+  // marginalised into the prior) leaves, dropping the oldest held keyframe beyond the bound.
+  void Hold(KeyframeState leaving, const std::set<LandmarkId>& consumed);
   void InitializeStereoLandmarks(const KeyframeState& kf);
   void InitializeMonoLandmarks();
   bool IsActive(LandmarkId id, const std::map<LandmarkId, int>& counts) const;
@@ -205,6 +227,7 @@ class SlidingWindowBa {
   int num_fixed_ = 1;
   int num_added_ = 0;
   std::deque<KeyframeState> window_;
+  std::deque<KeyframeState> held_;  // left the window, held constant; oldest first.
   // Last known position of every landmark ever initialised (given, triangulated or estimated);
   // the window's landmarks are those its keyframes observe. std::map: stable addresses for Ceres.
   std::map<LandmarkId, Eigen::Vector3d> landmarks_;

@@ -298,6 +298,50 @@ TEST(SlidingWindowBaTest, EstimatesTheRigsDisparityOffset) {
   EXPECT_LT(ate_estimated, 0.5 * ate_ignored);
 }
 
+// Options::num_held_keyframes: the last keyframes to leave the window stay beside it as
+// constants, at the pose they left with, and their observations of the window's landmarks
+// enter every solve; a loop correction moves them with the window.
+TEST(SlidingWindowBaTest, HeldKeyframesAreTheLastToLeaveAndMoveWithACorrection) {
+  const BaScene scene = MakeBaScene(SmallScene());
+  SlidingWindowBa::Options options;
+  options.landmark_exit = SlidingWindowBa::LandmarkExit::kDropSharedObservations;
+  options.window_size = 6;
+  options.num_held_keyframes = 3;
+  SlidingWindowBa ba(scene.K, options);
+  const double ate = AlignedAte(RunSequential(scene, options, 7, &ba), scene.T_w_c_gt);
+  const double ate_batch = AlignedAte(RunBatch(scene, options, 7), scene.T_w_c_gt);
+  EXPECT_LT(ate, 2.0 * ate_batch + 0.005) << "batch " << ate_batch;
+
+  const auto& left = ba.marginalized_keyframes();
+  ASSERT_EQ(left.size(), scene.keyframes.size() - 6);
+  const std::vector<KeyframeId> held = ba.HeldKeyframes();
+  ASSERT_EQ(held.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(held[i], left[left.size() - 3 + i].id) << i;
+  const SlidingWindowBa::Summary before = ba.Optimize();
+  EXPECT_EQ(before.num_held_keyframes, 3) << before.BriefReport();
+
+  // A rigid correction G of everything (window, held keyframes, landmarks) changes no residual:
+  // the next solve starts where the last one ended, with every held keyframe still used.
+  const Pose G(Eigen::Translation3d(0.4, -0.2, 0.1) *
+               Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()));
+  std::map<KeyframeId, Pose> corrected;
+  for (const auto& m : left) corrected[m.id] = G * m.T_w_c;
+  for (KeyframeId id : ba.WindowKeyframes()) corrected[id] = G * *ba.KeyframePose(id);
+  for (const auto& [id, p_w] : ba.Landmarks()) ba.SetLandmarkPosition(id, G * p_w);
+  ba.ApplyCorrection(corrected);
+  const SlidingWindowBa::Summary after = ba.Optimize();
+  EXPECT_EQ(after.num_held_keyframes, 3) << after.BriefReport();
+  EXPECT_EQ(after.num_outliers_removed, 0) << after.BriefReport();
+  // Without the prior (ApplyCorrection drops it) the start cost is the residuals' alone.
+  EXPECT_LT(after.initial_cost, 1.5 * before.final_cost) << after.BriefReport();
+
+  // Off by default: nothing is held.
+  SlidingWindowBa plain(scene.K, SlidingWindowBa::Options());
+  RunSequential(scene, SlidingWindowBa::Options(), 7, &plain);
+  EXPECT_TRUE(plain.HeldKeyframes().empty());
+  EXPECT_EQ(plain.Optimize().num_held_keyframes, 0);
+}
+
 TEST(SlidingWindowBaTest, TwoRunsAreBitIdentical) {
   BaSceneOptions so = SmallScene();
   so.num_keyframes = 12;
@@ -318,6 +362,10 @@ TEST(SlidingWindowBaTest, OptionsValidation) {
   o = SlidingWindowBa::Options();
   o.loss_scale = 0.0;
   EXPECT_FALSE(o.IsValid(&why));
+  o = SlidingWindowBa::Options();
+  o.num_held_keyframes = -1;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("num_held_keyframes"), std::string::npos);
   o = SlidingWindowBa::Options();
   o.max_solver_time_in_seconds = -1.0;
   EXPECT_FALSE(o.IsValid(&why));
