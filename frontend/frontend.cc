@@ -70,7 +70,7 @@ Frontend::Frontend(const StereoRig& rig, const FrontendOptions& options)
       motion_estimator_(rig, options.motion),
       keyframe_policy_(options.keyframe),
       place_recognition_(rig, options.loop),
-      local_map_search_(rig.left, options.local_map, options.tracking_matcher) {
+      local_map_search_(rig.left, options.local_map, options.tracking_matcher, rig.is_stereo()) {
   std::string why;
   CHECK(options_.IsValid(&why)) << why;
   CHECK(rig_.left.IsValid(&why)) << why;

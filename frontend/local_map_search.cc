@@ -18,8 +18,11 @@ bool LocalMapSearchOptions::IsValid(std::string* why) const {
 }
 
 LocalMapSearch::LocalMapSearch(const PinholeCamera& camera, const LocalMapSearchOptions& options,
-                               const MatcherOptions& matcher)
-    : camera_(camera), options_(options), matcher_(matcher) {
+                               const MatcherOptions& matcher, bool stereo)
+    : camera_(camera),
+      options_(options),
+      matcher_(matcher),
+      forget_after_frames_(stereo ? 1 : options.forget_after_frames) {
   std::string why;
   CHECK(options_.IsValid(&why)) << why;
 }
@@ -171,7 +174,7 @@ void LocalMapSearch::Remember(FrameId frame, const DetectedImage& detection,
     for (const auto& point : map_->points) mapped.insert(point.first);
   }
   for (auto it = appearance_.begin(); it != appearance_.end();) {
-    if (frame.value - it->second.last_seen > options_.forget_after_frames &&
+    if (frame.value - it->second.last_seen > forget_after_frames_ &&
         !mapped.count(it->first)) {
       it = appearance_.erase(it);
     } else {

@@ -51,19 +51,23 @@ struct LocalMap {
 
 struct LocalMapSearchOptions {
   bool enable = true;
-  // Stereo runs too. Off by default: the stereo results (docs/results.md) were measured
-  // without it, and its effect on them has not been measured yet.
+  // Stereo runs too (configs/kitti.yaml). Off by default: it helps fast motion (KITTI, the
+  // rendered `fast`) but not the slow rendered presets, and costs time (docs/results.md).
   bool stereo = false;
   double radius_px = 15.0;       // Search radius around each projection.
-  int forget_after_frames = 30;  // Descriptors of landmarks unseen that long (and not mapped).
+  // Descriptors of landmarks unseen that long (and not mapped). One camera only: a stereo
+  // landmark enters the map at a frame that observes it (its appearance is then that frame's),
+  // so a stereo rig forgets an unmapped appearance after one frame, with the same result.
+  int forget_after_frames = 30;
 
   bool IsValid(std::string* why) const;
 };
 
 class LocalMapSearch {
  public:
+  // `stereo`: the frames come from a stereo rig (see forget_after_frames).
   LocalMapSearch(const PinholeCamera& camera, const LocalMapSearchOptions& options,
-                 const MatcherOptions& matcher);
+                 const MatcherOptions& matcher, bool stereo);
 
   // The estimator's map after frame `map.frame` (replaces the previous one).
   void SetLocalMap(LocalMap map);
@@ -136,6 +140,7 @@ class LocalMapSearch {
   PinholeCamera camera_;
   LocalMapSearchOptions options_;
   MatcherOptions matcher_;
+  int forget_after_frames_;  // options_'s, or 1 for a stereo rig.
   std::optional<LocalMap> map_;
   std::unordered_map<LandmarkId, Eigen::Vector3d> point_of_;  // map_'s points by id.
   Pose velocity_ = Pose::Identity();  // T_prev_cur of the estimator's last two poses.
