@@ -54,7 +54,9 @@ TEST(VisualOdometry, RoverLoopDriftIsSmall) {
   ASSERT_TRUE(result.has_kitti);
   // Measured 0.134 % (450 frames, deterministic); bound 1.5x. DALA_VO_FRAMES changes the run,
   // and the bound only holds for the default.
-  if (!std::getenv("DALA_VO_FRAMES")) EXPECT_LT(result.kitti.t_err_percent, 1.5 * 0.134);
+  if (!std::getenv("DALA_VO_FRAMES")) {
+    EXPECT_LT(result.kitti.t_err_percent, 1.5 * 0.134);
+  }
 }
 
 // The second thread (right detection, first temporal matching beside the stereo matching) must
