@@ -1,0 +1,88 @@
+#include "frontend/local_map_search.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "frontend/harris.h"
+#include "tests/frontend/test_images.h"
+
+namespace dala {
+namespace {
+
+// A still camera at the origin looking at a textured plane 5 m away: every detection of the
+// image is a landmark on that plane, so the image seen again is found entirely in the map.
+struct Scene {
+  PinholeCamera camera;
+  DetectedImage detection;
+  std::vector<LandmarkId> ids;
+  LocalMap MapAfter(FrameId frame) const {
+    LocalMap map;
+    map.frame = frame;
+    for (size_t i = 0; i < ids.size(); ++i) {
+      map.points.emplace_back(ids[i], camera.Unproject(detection.points[i].uv) * 5.0);
+    }
+    return map;
+  }
+};
+
+Scene MakeScene() {
+  Scene s;
+  s.camera.width = 640;
+  s.camera.height = 480;
+  s.camera.fx = s.camera.fy = 500.0;
+  s.camera.cx = 320.0;
+  s.camera.cy = 240.0;
+  s.detection = DetectHarris(testing::MakeTexturedImage(640, 480, 11), HarrisOptions());
+  for (size_t i = 0; i < s.detection.points.size(); ++i) s.ids.push_back(LandmarkId(1000 + i));
+  return s;
+}
+
+// Frame 1 remembers every point under its landmark id; frames 2 and 3 see none of them; after
+// frame 3 they enter the map, and frame 4 (the same image) searches it.
+int FoundAfterAGap(const Scene& s, bool stereo) {
+  LocalMapSearch search(s.camera, LocalMapSearchOptions(), MatcherOptions::ForTracking(), stereo);
+  std::vector<int> length(s.ids.size(), 1);
+  search.Remember(FrameId(1), s.detection, s.ids, length);
+  const std::vector<LandmarkId> none(s.ids.size());
+  for (int frame : {2, 3}) search.Remember(FrameId(frame), s.detection, none, length);
+  search.SetLocalMap(s.MapAfter(FrameId(3)));
+  std::vector<LandmarkId> found(s.ids.size());
+  std::vector<int> track_length(s.ids.size(), 1);
+  const int n = search.Search(FrameId(3), Pose::Identity(), /*metric=*/true, s.detection, &found,
+                              &track_length);
+  int right = 0;
+  for (size_t i = 0; i < found.size(); ++i) right += found[i] == s.ids[i] ? 1 : 0;
+  EXPECT_EQ(right, n) << "every point found must get its own landmark's id";
+  return n;
+}
+
+TEST(LocalMapSearch, FindsTheMapsLandmarksByTheirLastAppearance) {
+  const Scene s = MakeScene();
+  ASSERT_GT(s.ids.size(), 200u);
+  // One camera keeps the appearance of an unmapped point for forget_after_frames (30): the
+  // landmark it becomes later is found.
+  EXPECT_GT(FoundAfterAGap(s, /*stereo=*/false), static_cast<int>(0.9 * s.ids.size()));
+}
+
+TEST(LocalMapSearch, AStereoRigForgetsUnmappedAppearancesAfterOneFrame) {
+  // A stereo landmark enters the map at a frame that observes it, so an appearance unmapped
+  // for two frames is of no use: forgotten (the store stays one frame's points, not 30).
+  const Scene s = MakeScene();
+  EXPECT_EQ(FoundAfterAGap(s, /*stereo=*/true), 0);
+  // What was mapped is kept, whatever its age.
+  LocalMapSearch search(s.camera, LocalMapSearchOptions(), MatcherOptions::ForTracking(), true);
+  std::vector<int> length(s.ids.size(), 1);
+  search.Remember(FrameId(1), s.detection, s.ids, length);
+  search.SetLocalMap(s.MapAfter(FrameId(1)));
+  const std::vector<LandmarkId> none(s.ids.size());
+  for (int frame : {2, 3, 4}) search.Remember(FrameId(frame), s.detection, none, length);
+  search.SetLocalMap(s.MapAfter(FrameId(4)));
+  std::vector<LandmarkId> found(s.ids.size());
+  std::vector<int> track_length(s.ids.size(), 1);
+  EXPECT_GT(search.Search(FrameId(4), Pose::Identity(), true, s.detection, &found, &track_length),
+            static_cast<int>(0.9 * s.ids.size()));
+}
+
+}  // namespace
+}  // namespace dala
