@@ -32,9 +32,10 @@
 // depth it ties to poses already estimated). What a held keyframe keeps: with a prior, only its
 // observations of the landmarks that stayed in the state (the others went into the prior and
 // would count twice); without, all of them. Its pose is the estimate when it left, moved by
-// ApplyCorrection. The prior marginalised that pose (a Gaussian) while the held residuals
-// condition on its value: their information on the held pose is counted in both, which is
-// the approximation ORB-SLAM's local BA makes (docs/backend.md measures it). A held observation
+// ApplyCorrection. The held residuals condition on that value (as ORB-SLAM's local BA does)
+// while the prior marginalised the same pose: the information on it is then counted in both,
+// an approximation ORB-SLAM, without a prior, does not make (docs/backend.md measures both
+// settings). Off by default: not better on every sequence (docs/backend.md). A held observation
 // that fails the outlier test is removed like a window one. A landmark becomes active by its
 // window observations only (min_observations), so holding keyframes changes no activation.
 
