@@ -13,7 +13,8 @@ namespace dala {
 //    `min_tracked_fraction` (the view has changed: new landmarks are needed);
 //  - the median image displacement of the landmarks tracked since the keyframe (parallax)
 //    exceeds `max_parallax_px` (enough baseline for the monocular estimators);
-//  - the camera travelled more than `max_distance_m` or turned more than `max_rotation_rad`;
+//  - the camera travelled more than `max_distance_m` (0: never; a distance is a property of one
+//    rig and one speed, configs/kitti.yaml turns it off) or turned more than `max_rotation_rad`;
 //  - `max_frames` frames passed (bounded gap for the backend) AND the view has changed at
 //    all: a median parallax of at least `min_parallax_px` or a rotation of at least a tenth of
 //    `max_rotation_rad`. A still camera (parallax of the image noise only) adds no keyframe, so
@@ -23,7 +24,7 @@ namespace dala {
 struct KeyframePolicyOptions {
   double min_tracked_fraction = 0.6;
   double max_parallax_px = 30.0;
-  double max_distance_m = 1.0;
+  double max_distance_m = 1.0;  // 0: off.
   double max_rotation_rad = 0.17;  // ~10 degrees.
   int max_frames = 10;
   double min_parallax_px = 1.0;  // ...for the frame-count criterion (see above).

@@ -31,6 +31,10 @@ TEST(KeyframePolicy, EachCriterionNamesItself) {
   e.T_kf_cur.translation().z() = 1.5;
   ASSERT_TRUE(policy.IsKeyframe(e, &reason));
   EXPECT_EQ(std::string(reason), "distance");
+  KeyframePolicyOptions no_metres;
+  no_metres.max_distance_m = 0;  // Off: a distance alone makes no keyframe.
+  e.T_kf_cur.translation().z() = 100;
+  EXPECT_FALSE(KeyframePolicy(no_metres).IsKeyframe(e));
   e = Still(2);
   e.T_kf_cur.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()).toRotationMatrix();
   ASSERT_TRUE(policy.IsKeyframe(e, &reason));
@@ -63,6 +67,12 @@ TEST(KeyframePolicy, InvalidOptionsAreRejected) {
   o.min_parallax_px = -1;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("min_parallax_px"), std::string::npos);
+  o = KeyframePolicyOptions();
+  o.max_distance_m = 0;
+  EXPECT_TRUE(o.IsValid(&why));
+  o.max_distance_m = -1;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("max_distance_m"), std::string::npos);
 }
 
 }  // namespace
