@@ -169,13 +169,8 @@ void LocalMapSearch::Remember(FrameId frame, const DetectedImage& detection,
     a.last_seen = frame.value;
   }
   // Forget what is neither mapped nor recently seen (bounded memory).
-  std::unordered_set<LandmarkId> mapped;
-  if (map_) {
-    for (const auto& point : map_->points) mapped.insert(point.first);
-  }
   for (auto it = appearance_.begin(); it != appearance_.end();) {
-    if (frame.value - it->second.last_seen > forget_after_frames_ &&
-        !mapped.count(it->first)) {
+    if (frame.value - it->second.last_seen > forget_after_frames_ && !IsMapped(it->first)) {
       it = appearance_.erase(it);
     } else {
       ++it;
