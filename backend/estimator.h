@@ -47,6 +47,19 @@ struct EstimatorOutput {
   bool loop_closed = false;    // A loop closure corrected the trajectory at this frame.
 };
 
+// What Estimator::Refine did.
+struct RefinementSummary {
+  bool done = false;   // false: nothing changed (`report` says why).
+  std::string report;  // One line for the log.
+  int keyframes = 0;
+  int landmarks = 0;
+  int observations = 0;
+  int outliers_removed = 0;
+  double initial_cost = 0.0;  // The solver's cost before and after (0.5 sum rho(|r|^2)).
+  double final_cost = 0.0;
+  double time_s = 0.0;
+};
+
 class Estimator {
  public:
   virtual ~Estimator() = default;
@@ -65,6 +78,16 @@ class Estimator {
 
   // The current map.
   virtual std::vector<MapPoint> map() const = 0;
+
+  // After the last frame of an offline run: re-estimates the whole trajectory and map at once
+  // (the BA estimator: a global bundle adjustment over every keyframe, backend/ba/global_ba.h),
+  // so trajectory() and map() give the refined estimates. Frames may still be added after it.
+  // Default: an estimator that cannot (the EKFs: a filter has no past to revisit).
+  virtual RefinementSummary Refine() {
+    RefinementSummary s;
+    s.report = "no global refinement for the " + name() + "/" + mode() + " estimator";
+    return s;
+  }
 
   // Starts in a saved map (before the first measurement): its landmarks (world points, ids
   // unique in the run) are the map every frame is placed in until one is (by PnP on the

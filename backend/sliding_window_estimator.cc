@@ -47,6 +47,11 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (max_landmark_depth_m <= 0) return fail("ba.max_landmark_depth_m must be > 0");
   if (mono_reinit_after_lost_frames < 1)
     return fail("ba.mono_reinit_after_lost_frames must be >= 1");
+  if (final_ba != "after_loop" && final_ba != "always" && final_ba != "off") {
+    return fail("ba.final_ba must be after_loop, always or off");
+  }
+  if (global_ba.max_num_iterations < 1) return fail("ba.final_ba_max_iterations must be >= 1");
+  if (!global_ba.IsValid(why)) return false;
   return mono_init.IsValid(why);
 }
 
@@ -153,6 +158,10 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
     } else {
       // Mono: the previous keyframe's view of it makes the pair the window triangulates.
       ba_.AddObservation(last_keyframe_, last_keyframe_observations_.at(o->landmark));
+      if (!options_.final_ba_all_tracks) {
+        observation_archive_.emplace_back(last_keyframe_,
+                                          last_keyframe_observations_.at(o->landmark));
+      }
       ++landmark_observations_[o->landmark];
     }
     anchor_.emplace(o->landmark, KeyframeId(num_keyframes_ - 1));
@@ -351,7 +360,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
       kf.observations.push_back(ToBa(o));
       ++landmark_observations_[o.landmark];
     }
-    ba_.AddKeyframe(kf);
+    AddToWindow(kf, f);
     keyframe_poses_[kf.id] = T_w_c;
     keyframe_of_frame_[f.frame] = kf.id;
     return kf.id;
@@ -396,8 +405,34 @@ void SlidingWindowEstimator::RememberLastKeyframe(KeyframeId id, const FrameMeas
   }
 }
 
+void SlidingWindowEstimator::AddToWindow(const BaKeyframe& kf, const FrameMeasurement& m) {
+  ba_.AddKeyframe(kf);
+  if (options_.final_ba_all_tracks) {
+    for (const FeatureObservation& o : m.observations) {
+      if (!unconfirmed_loop_landmarks_.count(o.landmark)) {
+        observation_archive_.emplace_back(kf.id, ToBa(o));
+      }
+    }
+  } else {
+    for (const BaObservation& o : kf.observations) observation_archive_.emplace_back(kf.id, o);
+  }
+  // The window's gauge (SlidingWindowBa: num_fixed_keyframes, -1 => 1 stereo, 2 mono).
+  const int num_fixed = options_.ba.num_fixed_keyframes >= 0 ? options_.ba.num_fixed_keyframes
+                                                              : (rig_.is_stereo() ? 1 : 2);
+  // Refine's gauge: a stereo window's first keyframe held; a mono one's first keyframe held and
+  // its distance to the second (the unit), the rest of the second pose free (7 dof).
+  if (added_since_window_start_ == 0 || (added_since_window_start_ < num_fixed && rig_.is_stereo())) {
+    gauge_keyframes_.insert(kf.id);
+  } else if (added_since_window_start_ == 1 && !rig_.is_stereo()) {
+    const KeyframeId first = *gauge_keyframes_.rbegin();
+    unit_pairs_.push_back({first, kf.id});
+  }
+  ++added_since_window_start_;
+}
+
 void SlidingWindowEstimator::RestartWindow() {
   WaitForWindowSolve();
+  added_since_window_start_ = 0;
   ba_ = SlidingWindowBa(IntrinsicsOf(rig_, ba_.disparity_offset_px()), options_.ba);
   for (const auto& [id, p_w] : map_points_) ba_.SetLandmarkPosition(id, p_w);
   // The last keyframe left with the old window: its observations can pair with none of the new
@@ -519,7 +554,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     kf.t_ns = m.t_ns;
     kf.T_w_c = T_w_c;
     kf.observations = SelectKeyframeObservations(m, T_w_c);
-    ba_.AddKeyframe(kf);
+    AddToWindow(kf, m);
     keyframe_poses_[kf.id] = T_w_c;
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});
     keyframe_of_frame_[m.frame] = kf.id;
@@ -570,6 +605,82 @@ bool SlidingWindowEstimator::UseMap(const std::vector<MapPoint>& landmarks) {
   }
   awaiting_map_ = true;
   return true;
+}
+
+RefinementSummary SlidingWindowEstimator::Refine() {
+  WaitForWindowSolve();
+  RefinementSummary out;
+  if (options_.final_ba == "off") {
+    out.report = "global BA off (ba.final_ba=off)";
+    return out;
+  }
+  if (options_.final_ba == "after_loop" && num_loops_closed() == 0) {
+    out.report = "global BA not run: no loop was closed (ba.final_ba=always runs it anyway)";
+    return out;
+  }
+  if (keyframe_poses_.size() < 2) {
+    out.report = "global BA: fewer than two keyframes, nothing to refine";
+    return out;
+  }
+  GlobalBaProblem problem;
+  problem.keyframes = keyframe_poses_;
+  problem.held = gauge_keyframes_;
+  for (const auto& [a, b] : unit_pairs_) {
+    problem.fixed_distances.push_back(
+        {a, b, (keyframe_poses_.at(b).translation() - keyframe_poses_.at(a).translation()).norm()});
+  }
+  problem.landmarks = map_points_;
+  problem.observations = observation_archive_;
+  const GlobalBaSummary s =
+      SolveGlobalBa(IntrinsicsOf(rig_, ba_.disparity_offset_px()), options_.global_ba, &problem);
+  out.report = s.BriefReport();
+  out.keyframes = s.num_keyframes;
+  out.landmarks = s.num_landmarks;
+  out.observations = s.num_observations;
+  out.outliers_removed = s.num_outliers_removed;
+  out.initial_cost = s.initial_cost;
+  out.final_cost = s.final_cost;
+  out.time_s = s.time_s;
+  if (!s.usable) {
+    LOG(WARNING) << out.report << ": the run's estimates are kept";
+    return out;
+  }
+  out.done = true;
+  // Mono: each keyframe's change of local unit, from its distance to the next keyframe (the
+  // previous one for the last); the frames stored relative to it are scaled by it.
+  std::map<KeyframeId, double> unit_change;
+  if (!rig_.is_stereo()) {
+    for (auto it = keyframe_poses_.begin(); it != keyframe_poses_.end(); ++it) {
+      auto other = std::next(it);
+      if (other == keyframe_poses_.end()) other = std::prev(it);
+      const double before = (other->second.translation() - it->second.translation()).norm();
+      const double after = (problem.keyframes.at(other->first).translation() -
+                            problem.keyframes.at(it->first).translation())
+                               .norm();
+      unit_change[it->first] = before > 1e-12 && after > 1e-12 ? after / before : 1.0;
+    }
+    for (FrameRecord& f : frames_) {
+      const auto it = unit_change.find(f.reference);
+      if (f.has_pose && it != unit_change.end()) f.T_kf_c.translation() *= it->second;
+    }
+  }
+  keyframe_poses_ = problem.keyframes;
+  // The refined landmarks, and the tracks the global BA mapped (their observation count: the
+  // keyframes that saw them).
+  std::map<LandmarkId, int> views;
+  for (const auto& [kf, o] : problem.observations) ++views[o.landmark];
+  for (const auto& [id, p_w] : problem.landmarks) {
+    if (!map_points_.count(id)) landmark_observations_[id] = views[id];
+    map_points_[id] = p_w;
+  }
+  for (const auto& [id, p_w] : map_points_) {
+    if (ba_.LandmarkPosition(id)) ba_.SetLandmarkPosition(id, p_w);
+  }
+  ba_.ApplyCorrection(keyframe_poses_);
+  if (!frames_.empty() && frames_.back().has_pose) {
+    T_w_prev_ = KeyframePoseNow(frames_.back().reference) * frames_.back().T_kf_c;
+  }
+  return out;
 }
 
 std::vector<MapPoint> SlidingWindowEstimator::map() const {

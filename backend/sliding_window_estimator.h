@@ -60,6 +60,15 @@
 // (the keyframe that added it): p_w_new = T_w_a_new T_w_a_old^-1 p_w_old, and frames between
 // keyframes follow (stored relative to keyframes). The relabelled observations (old landmark
 // ids) then join the window at the moved positions.
+//
+// Refinement (Refine, after the last frame of an offline run): the global BA over every keyframe
+// so far, every landmark with a position that two of them observe, and every observation the
+// window was given (those the window rejected as outliers too: the global BA runs its own
+// chi-square test), each window's gauge keyframes held. Keyframe poses and landmarks take the
+// result (and the window, ApplyCorrection); the frames between keyframes follow their keyframe
+// (stored relative to it), and in mono their translation is scaled by the keyframe's change of
+// local unit (the refined over the old distance to the next keyframe, or the previous one for
+// the last), as after a Sim(3) loop closure.
 
 #include <functional>
 #include <map>
@@ -68,6 +77,7 @@
 #include <string>
 #include <vector>
 
+#include "backend/ba/global_ba.h"
 #include "backend/ba/pose_graph.h"
 #include "backend/ba/sim3_pose_graph.h"
 #include "backend/ba/sliding_window_ba.h"
@@ -135,6 +145,17 @@ struct SlidingWindowEstimatorOptions {
   // One camera: after this many lost frames in a row (PnP recovery failing too: the map is out
   // of view), a new map is initialised and placed where the old one would continue.
   int mono_reinit_after_lost_frames = 10;
+  // Refine() (System::Finish, `dala run` after the last frame): the global BA over every
+  // keyframe (backend/ba/global_ba.h). When: "off", "always", or "after_loop" (a run that
+  // closed a loop: the pose graph moved the keyframes with an approximate model, and the global
+  // BA spreads the loop's correction over every observation, as ORB-SLAM's global BA after a
+  // loop does). Off by default: on the rendered and KITTI runs it is better on some and worse
+  // on others, loops or not (docs/backend.md, "Global BA after the run").
+  std::string final_ba = "off";
+  // What the global BA solves: every track of every keyframe (the frontend's observations,
+  // those the window never mapped triangulated first), or only what the window was given.
+  bool final_ba_all_tracks = true;
+  GlobalBaOptions global_ba;
 
   bool IsValid(std::string* why) const;
   // IsValid and what the rig adds (one camera: a gauge of at least two held keyframes).
@@ -153,6 +174,8 @@ class SlidingWindowEstimator : public Estimator {
   Trajectory trajectory() const override;
   std::vector<MapPoint> map() const override;
   bool UseMap(const std::vector<MapPoint>& landmarks) override;
+  // The global BA (see the class comment, "Refinement").
+  RefinementSummary Refine() override;
 
   const SlidingWindowBa& ba() const {
     WaitForWindowSolve();
@@ -193,6 +216,8 @@ class SlidingWindowEstimator : public Estimator {
   // Mono: keyframe `id` (frame m) is the last one; its observations are the candidates for new
   // landmarks at the next keyframe.
   void RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m);
+  // Adds kf to the window and to what Refine solves (the observations, the window's gauge).
+  void AddToWindow(const BaKeyframe& kf, const FrameMeasurement& m);
   // landmarks_in_state and local_map of `out` from the window.
   void ReportLandmarks(EstimatorOutput* out) const;
   Pose KeyframePoseNow(KeyframeId id) const;
@@ -235,6 +260,12 @@ class SlidingWindowEstimator : public Estimator {
   std::map<LandmarkId, KeyframeId> anchor_;            // The keyframe that added the landmark.
   std::map<FrameId, KeyframeId> keyframe_of_frame_;
   std::vector<PoseGraphEdge> loop_edges_;              // Every loop closed so far.
+  // For Refine: every observation given to the window (keyframe, observation), and the
+  // keyframes each window held as its gauge (the first one or two after each (re)start).
+  std::vector<std::pair<KeyframeId, BaObservation>> observation_archive_;
+  std::set<KeyframeId> gauge_keyframes_;
+  std::vector<std::pair<KeyframeId, KeyframeId>> unit_pairs_;  // Mono: (first, second) per map.
+  int added_since_window_start_ = 0;
   std::vector<Sim3Edge> mono_loop_edges_;  // One camera: every loop, in the current units.
   // One camera: old landmarks a loop that was not closed relabelled (see Add).
   std::set<LandmarkId> unconfirmed_loop_landmarks_;

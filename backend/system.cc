@@ -206,6 +206,8 @@ std::vector<SavedKeyframe> System::keyframes() const {
   return out;
 }
 
+RefinementSummary System::Finish() { return estimator_->Refine(); }
+
 std::string System::ScaleDescription() const {
   if (options_.mode == "stereo") return "metric (stereo)";
   if (saved_map_metric_) {

@@ -76,6 +76,14 @@ class System {
   // relocalised like any lost frame.
   void SkipFrame(FrameId frame, int64_t t_ns, const std::string& note);
 
+  // After the last frame of an offline run (`dala run` calls it): the estimator's global
+  // refinement when it has one (the BA estimator: a global bundle adjustment over every
+  // keyframe, backend/ba/global_ba.h, when options.ba.final_ba says so: by default after a run
+  // that closed a loop); trajectory(), map() and the saved map then give the refined estimates.
+  // Otherwise nothing changes (done = false, `report` says why). Frames may still be tracked
+  // after it.
+  RefinementSummary Finish();
+
   // Every frame tracked so far that has a pose (estimates corrected by later optimisation);
   // a mono run leaves out the frames before its initialisation (stats() says which).
   Trajectory trajectory() const { return estimator_->trajectory(); }

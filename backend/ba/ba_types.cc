@@ -1,5 +1,7 @@
 #include "backend/ba/ba_types.h"
 
+#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 
 namespace dala {
@@ -24,6 +26,39 @@ std::optional<Eigen::Vector3d> TriangulateStereo(const StereoIntrinsics& K,
   if (!(disparity >= min_disparity_px) || disparity <= 0.0) return std::nullopt;
   const double z = K.fx * K.baseline / disparity;
   return Eigen::Vector3d((obs.uv.x() - K.cx) * z / K.fx, (obs.uv.y() - K.cy) * z / K.fy, z);
+}
+
+std::optional<Eigen::Vector3d> TriangulateViews(const StereoIntrinsics& K,
+                                                const std::vector<Pose>& T_w_c,
+                                                const std::vector<Eigen::Vector2d>& uv,
+                                                double min_parallax_deg, double min_depth) {
+  const size_t n = std::min(T_w_c.size(), uv.size());
+  if (n < 2) return std::nullopt;
+  Eigen::MatrixXd A(2 * n, 4);
+  std::vector<Eigen::Vector3d> bearings_w;
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d f((uv[i].x() - K.cx) / K.fx, (uv[i].y() - K.cy) / K.fy, 1.0);
+    const Eigen::Matrix<double, 3, 4> P = T_w_c[i].inverse().matrix().topRows<3>();
+    A.row(2 * i) = f.x() * P.row(2) - P.row(0);
+    A.row(2 * i + 1) = f.y() * P.row(2) - P.row(1);
+    bearings_w.push_back(T_w_c[i].rotation() * f.normalized());
+  }
+  double max_angle = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      max_angle =
+          std::max(max_angle, std::acos(std::clamp(bearings_w[i].dot(bearings_w[j]), -1.0, 1.0)));
+    }
+  }
+  if (max_angle < min_parallax_deg * M_PI / 180.0) return std::nullopt;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d X = svd.matrixV().col(3);
+  if (std::abs(X[3]) < 1e-12) return std::nullopt;
+  const Eigen::Vector3d p = X.head<3>() / X[3];
+  for (size_t i = 0; i < n; ++i) {
+    if ((T_w_c[i].inverse() * p).z() < min_depth) return std::nullopt;
+  }
+  return p;
 }
 
 }  // namespace dala

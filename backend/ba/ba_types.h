@@ -68,6 +68,17 @@ constexpr double kChi2Quantile95Dof3 = 7.815;  // stereo (u, v, u_r)
 std::optional<Eigen::Vector3d> TriangulateStereo(const StereoIntrinsics& K,
                                                  const BaObservation& obs, double min_disparity_px);
 
+// Linear (DLT) triangulation of one point from its left-image pixels `uv[i]` in cameras
+// `T_w_c[i]` (>= 2 views): each view gives x_n (P_3 X) - P_1 X = 0 and y_n (P_3 X) - P_2 X = 0,
+// with P = [R_w_c^T | -R_w_c^T t_w_c] and (x_n, y_n) the normalised coordinates; X is the right
+// singular vector of the smallest singular value. nullopt when the largest angle between two of
+// the rays is below min_parallax_deg, X is at infinity, or the point lies closer than min_depth
+// to (or behind) one of the cameras.
+std::optional<Eigen::Vector3d> TriangulateViews(const StereoIntrinsics& K,
+                                                const std::vector<Pose>& T_w_c,
+                                                const std::vector<Eigen::Vector2d>& uv,
+                                                double min_parallax_deg, double min_depth);
+
 }  // namespace dala
 
 #endif  // DALA_BACKEND_BA_BA_TYPES_H_

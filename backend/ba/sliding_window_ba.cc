@@ -4,7 +4,6 @@
 #include <ceres/solver.h>
 #include <glog/logging.h>
 
-#include <Eigen/SVD>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -147,45 +146,19 @@ bool SlidingWindowBa::IsActive(LandmarkId id, const std::map<LandmarkId, int>& c
 }
 
 bool SlidingWindowBa::TriangulateMono(LandmarkId id, Eigen::Vector3d* p_w) const {
-  // Linear triangulation: each view gives x_n (P_3 X) - P_1 X = 0, y_n (P_3 X) - P_2 X = 0 with
-  // P = [R_w_c^T | -R_w_c^T t_w_c] and (x_n, y_n) the normalised coordinates.
-  std::vector<Eigen::Matrix<double, 2, 4>> rows;
-  std::vector<Eigen::Vector3d> bearings_w;
   std::vector<Pose> poses;
+  std::vector<Eigen::Vector2d> uv;
   for (const KeyframeState& kf : window_) {
     for (const BaObservation& obs : kf.observations) {
       if (obs.landmark != id) continue;
-      const Pose T_w_c = BlockToPose(kf.x);
-      const Pose T_c_w = T_w_c.inverse();
-      const Eigen::Vector3d f((obs.uv.x() - K_.cx) / K_.fx, (obs.uv.y() - K_.cy) / K_.fy, 1.0);
-      const Eigen::Matrix<double, 3, 4> P = T_c_w.matrix().topRows<3>();
-      Eigen::Matrix<double, 2, 4> A;
-      A.row(0) = f.x() * P.row(2) - P.row(0);
-      A.row(1) = f.y() * P.row(2) - P.row(1);
-      rows.push_back(A);
-      bearings_w.push_back(T_w_c.rotation() * f.normalized());
-      poses.push_back(T_w_c);
+      poses.push_back(BlockToPose(kf.x));
+      uv.push_back(obs.uv);
     }
   }
-  if (rows.size() < 2) return false;
-  double max_angle = 0.0;
-  for (size_t i = 0; i < bearings_w.size(); ++i) {
-    for (size_t j = i + 1; j < bearings_w.size(); ++j) {
-      max_angle =
-          std::max(max_angle, std::acos(std::clamp(bearings_w[i].dot(bearings_w[j]), -1.0, 1.0)));
-    }
-  }
-  if (max_angle < options_.min_triangulation_parallax_deg * M_PI / 180.0) return false;
-  Eigen::MatrixXd A(2 * rows.size(), 4);
-  for (size_t i = 0; i < rows.size(); ++i) A.middleRows<2>(2 * i) = rows[i];
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
-  const Eigen::Vector4d X = svd.matrixV().col(3);
-  if (std::abs(X[3]) < 1e-12) return false;
-  const Eigen::Vector3d p = X.head<3>() / X[3];
-  for (const Pose& T_w_c : poses) {
-    if ((T_w_c.inverse() * p).z() < options_.min_depth) return false;
-  }
-  *p_w = p;
+  const std::optional<Eigen::Vector3d> p = TriangulateViews(
+      K_, poses, uv, options_.min_triangulation_parallax_deg, options_.min_depth);
+  if (!p) return false;
+  *p_w = *p;
   return true;
 }
 
