@@ -260,8 +260,9 @@ class SlidingWindowEstimator : public Estimator {
   std::map<LandmarkId, KeyframeId> anchor_;            // The keyframe that added the landmark.
   std::map<FrameId, KeyframeId> keyframe_of_frame_;
   std::vector<PoseGraphEdge> loop_edges_;              // Every loop closed so far.
-  // For Refine: every observation given to the window (keyframe, observation), and the
-  // keyframes each window held as its gauge (the first one or two after each (re)start).
+  // For Refine (kept only when options_.final_ba is not "off"): every observation given to the
+  // window, or every track of each keyframe (final_ba_all_tracks), as (keyframe, observation);
+  // and the keyframes each window held as its gauge (the first one or two after each restart).
   std::vector<std::pair<KeyframeId, BaObservation>> observation_archive_;
   std::set<KeyframeId> gauge_keyframes_;
   std::vector<std::pair<KeyframeId, KeyframeId>> unit_pairs_;  // Mono: (first, second) per map.
