@@ -425,9 +425,10 @@ void SlidingWindowEstimator::AddToWindow(const BaKeyframe& kf, const FrameMeasur
                                                               : (rig_.is_stereo() ? 1 : 2);
   // Refine's gauge: a stereo window's first keyframe held; a mono one's first keyframe held and
   // its distance to the second (the unit), the rest of the second pose free (7 dof).
-  if (added_since_window_start_ == 0 || (added_since_window_start_ < num_fixed && rig_.is_stereo())) {
+  const bool stereo = rig_.is_stereo();
+  if (added_since_window_start_ == 0 || (stereo && added_since_window_start_ < num_fixed)) {
     gauge_keyframes_.insert(kf.id);
-  } else if (added_since_window_start_ == 1 && !rig_.is_stereo()) {
+  } else if (!stereo && added_since_window_start_ == 1) {
     const KeyframeId first = *gauge_keyframes_.rbegin();
     unit_pairs_.push_back({first, kf.id});
   }

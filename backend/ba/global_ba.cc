@@ -34,10 +34,10 @@ bool GlobalBaOptions::IsValid(std::string* why) const {
 std::string GlobalBaSummary::BriefReport() const {
   std::ostringstream os;
   os << "global BA: " << num_keyframes << " keyframes, " << num_landmarks << " landmarks ("
-     << num_triangulated << " triangulated here), "
-     << num_observations << " observations, " << num_outliers_removed << " outliers removed, "
-     << num_solves << " solves / " << num_iterations << " iterations, cost " << initial_cost
-     << " -> " << final_cost << (usable ? "" : " (NOT usable)");
+     << num_triangulated << " triangulated here), " << num_observations << " observations, "
+     << num_outliers_removed << " outliers removed, " << num_solves << " solves / "
+     << num_iterations << " iterations, cost " << initial_cost << " -> " << final_cost
+     << (usable ? "" : " (NOT usable)");
   return os.str();
 }
 
@@ -73,8 +73,8 @@ class DistanceCost : public ceres::SizedCostFunction<1, 7, 7> {
 
 // Positions of the observed landmarks that have none (see Options::triangulate_unmapped).
 std::map<LandmarkId, Eigen::Vector3d> TriangulateUnmapped(const StereoIntrinsics& K,
-                                                           const GlobalBaOptions& options,
-                                                           const GlobalBaProblem& problem) {
+                                                          const GlobalBaOptions& options,
+                                                          const GlobalBaProblem& problem) {
   struct Views {
     std::vector<Pose> T_w_c;
     std::vector<Eigen::Vector2d> uv;
@@ -132,7 +132,7 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K, const GlobalBaOptions& 
     return x.count(o.first) && p.count(o.second.landmark);
   };
 
-  std::set<KeyframeId> optimised;  // In some solve.
+  std::set<KeyframeId> optimised;            // In some solve.
   std::set<LandmarkId> last_used_landmarks;  // In the last solve.
   auto manifold = MakePoseManifold();
   auto loss = MakeLoss(options.loss, options.loss_scale);

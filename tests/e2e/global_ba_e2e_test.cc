@@ -67,9 +67,8 @@ TEST(GlobalBaE2e, RefinesEveryKeyframeStereoAndMono) {
         std::string(mode) == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
     const double online = Ate(seq, run.online, alignment);
     const double refined = Ate(seq, run.refined, alignment);
-    std::cout << "[ measured ] " << mode << " rover 150: ATE " << online << " m online, "
-              << refined << " m after the global BA (" << run.refinement.report << ")"
-              << std::endl;
+    std::cout << "[ measured ] " << mode << " rover 150: ATE " << online << " m online, " << refined
+              << " m after the global BA (" << run.refinement.report << ")" << std::endl;
     EXPECT_LT(refined, 1.5 * (std::string(mode) == "mono" ? 0.0298 : 0.00486));
   }
 }

@@ -43,8 +43,8 @@ GlobalBaProblem DriftedProblem(const BaScene& scene, int num_held, double point_
       T_w_c = scene.T_w_c_gt[i];
       problem.held.insert(id);
     } else {
-      T_w_c = T_w_c * PerturbPose(scene.T_w_c_gt[i - 1].inverse() * scene.T_w_c_gt[i], rng,
-                                  0.004, 0.02);
+      T_w_c = T_w_c *
+              PerturbPose(scene.T_w_c_gt[i - 1].inverse() * scene.T_w_c_gt[i], rng, 0.004, 0.02);
     }
     problem.keyframes[id] = T_w_c;
     for (const BaObservation& o : scene.keyframes[i].observations) {
@@ -154,10 +154,9 @@ TEST(GlobalBaTest, RemovesGrossOutliersAndIgnoresWhatItCannotUse) {
   ASSERT_TRUE(s.usable) << s.BriefReport();
   EXPECT_GE(s.num_outliers_removed, 10);
   for (const auto& [kf, landmark] : wrong) {
-    EXPECT_TRUE(std::none_of(problem.observations.begin(), problem.observations.end(),
-                             [&](const auto& o) {
-                               return o.first == kf && o.second.landmark == landmark;
-                             }))
+    EXPECT_TRUE(
+        std::none_of(problem.observations.begin(), problem.observations.end(),
+                     [&](const auto& o) { return o.first == kf && o.second.landmark == landmark; }))
         << "keyframe " << kf << " landmark " << landmark;
   }
   EXPECT_LT(PositionRmse(problem.keyframes, scene.T_w_c_gt), 0.01) << s.BriefReport();
