@@ -12,6 +12,7 @@
 #include "backend/ekf/stereo_ekf.h"
 #include "backend/sliding_window_estimator.h"
 #include "core/error.h"
+#include "core/quantized_descriptors.h"
 
 namespace dala {
 
@@ -153,8 +154,9 @@ void System::RecordKeyframe(const cv::Mat& left) {
       saved.scale = p.scale;
       saved.lambda1 = p.lambda1;
       saved.lambda2 = p.lambda2;
-      const float* row = detection->descriptors.ptr<float>(static_cast<int>(i));
-      saved.descriptor.assign(row, row + n);
+      saved.descriptor.resize(n);
+      QuantizeDescriptor(detection->descriptors.ptr<float>(static_cast<int>(i)), n,
+                         saved.descriptor.data());
       record.points.push_back(std::move(saved));
     }
   }

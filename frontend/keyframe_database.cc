@@ -11,15 +11,26 @@ void KeyframeDatabase::Add(KeyframeEntry entry) {
       << "KeyframeDatabase::Add: frame ids must increase (" << entry.frame << " after "
       << entries_.back().frame << ")";
   const size_t n = entry.landmark.size();
-  CHECK_EQ(entry.points.points.size(), n) << "one point per landmark id";
+  CHECK_EQ(entry.points.size(), n) << "one point per landmark id";
   CHECK_EQ(entry.stereo.size(), n) << "one stereo point per landmark id";
-  CHECK_EQ(static_cast<size_t>(entry.points.descriptors.rows), n) << "one descriptor per point";
+  CHECK_EQ(static_cast<size_t>(entry.descriptors.rows()), n) << "one descriptor per point";
   // The vectors were grown by push_back (up to twice the memory they need); entries live for the
   // whole run.
-  entry.points.points.shrink_to_fit();
+  entry.points.shrink_to_fit();
+  entry.descriptors.shrink_to_fit();
   entry.landmark.shrink_to_fit();
   entry.stereo.shrink_to_fit();
   entries_.push_back(std::move(entry));
+}
+
+DetectedImage KeyframeEntry::Detection() const {
+  DetectedImage d;
+  d.points = points;
+  d.descriptors = descriptors.Expand();
+  d.image_size = image_size;
+  d.patch_size = patch_size;
+  d.patch_spacing = patch_spacing;
+  return d;
 }
 
 const KeyframeEntry* KeyframeDatabase::Find(FrameId frame) const {

@@ -10,8 +10,10 @@
 // stereo depth (the only ones a PnP can use): position, landmark id, normalised patch, and the
 // stereo point in the keyframe's left camera with its covariance.
 //
-// Memory: ~0.3 MB per keyframe with 500 stereo points (11x11 float patches); the image pyramid
-// is NOT kept (the matcher only resamples patches in its second image, the current frame).
+// Memory: ~0.13 MB per keyframe with 500 stereo points (11x11 patches at 8 bits,
+// core/quantized_descriptors.h; 0.3 MB as floats); the image pyramid is NOT kept (the
+// matcher only resamples patches in its second image, the current frame), nor the matcher's
+// neighbour lists (Detection() builds the matcher's input at each verification).
 //
 // Not thread-safe.
 
@@ -23,6 +25,7 @@
 #include <opencv2/core.hpp>
 
 #include "core/geometry.h"
+#include "core/quantized_descriptors.h"
 #include "core/types.h"
 #include "frontend/harris.h"
 #include "frontend/stereo.h"
@@ -38,14 +41,21 @@ struct KeyframeEntry {
   double path_length_m = 0.0;
   // Global appearance descriptor (see place_recognition.h): CV_32F, z-normalised thumbnail.
   cv::Mat global_descriptor;
-  // The stereo points: `points.points[k]` and `points.descriptors.row(k)` (no pyramid) go with
-  // landmark[k] and stereo[k]. One camera: points with a landmark id, stereo[k] the mapped
-  // landmark's point in this camera (the map's unit) or empty.
-  DetectedImage points;
+  // The stereo points: points[k] and descriptors' row k go with landmark[k] and stereo[k]. One
+  // camera: points with a landmark id, stereo[k] the mapped landmark's point in this camera (the
+  // map's unit) or empty.
+  std::vector<InterestPoint> points;
+  QuantizedDescriptors descriptors;
   std::vector<LandmarkId> landmark;
   std::vector<std::optional<StereoPoint>> stereo;
+  // Of the keyframe's detection (what the matcher needs to resample patches around a point).
+  cv::Size image_size;
+  int patch_size = 11;
+  double patch_spacing = 1.5;
 
   size_t size() const { return landmark.size(); }
+  // The points as the matcher takes them: descriptors expanded to floats, no pyramid.
+  DetectedImage Detection() const;
 };
 
 class KeyframeDatabase {

@@ -117,9 +117,9 @@ KeyframeEntry PlaceRecognition::MakeEntry(FrameId frame, int64_t t_ns, const Pos
   e.T_w_c = T_w_c;
   e.path_length_m = path_length_m;
   e.global_descriptor = GlobalDescriptor(left, options_);
-  e.points.image_size = detection.image_size;
-  e.points.patch_size = detection.patch_size;
-  e.points.patch_spacing = detection.patch_spacing;
+  e.image_size = detection.image_size;
+  e.patch_size = detection.patch_size;
+  e.patch_spacing = detection.patch_spacing;
   // Stereo: the points with a stereo depth. One camera: the points with a landmark id, those
   // with a 3D point (mapped) first, then the strongest corners, at most mono_max_entry_points.
   std::vector<int> rows;
@@ -134,11 +134,11 @@ KeyframeEntry PlaceRecognition::MakeEntry(FrameId frame, int64_t t_ns, const Pos
     rows.resize(options_.mono_max_entry_points);
     std::sort(rows.begin(), rows.end());
   }
-  e.points.descriptors.create(static_cast<int>(rows.size()), detection.descriptors.cols, CV_32F);
+  e.descriptors = QuantizedDescriptors(detection.descriptors.cols);
   for (size_t k = 0; k < rows.size(); ++k) {
     const int i = rows[k];
-    e.points.points.push_back(detection.points[i]);
-    detection.descriptors.row(i).copyTo(e.points.descriptors.row(static_cast<int>(k)));
+    e.points.push_back(detection.points[i]);
+    e.descriptors.AppendRow(detection.descriptors, i);
     e.landmark.push_back(landmark[i]);
     e.stereo.push_back(stereo[i]);
   }
@@ -161,7 +161,7 @@ std::optional<PlaceMatch> PlaceRecognition::Verify(
     bool* rejected_by_gate, bool gate) const {
   if (rejected_by_gate) *rejected_by_gate = false;
   if (static_cast<int>(old.size()) < options_.min_inliers) return std::nullopt;
-  const std::vector<Match> matches = MatchPoints(old.points, detection, options_.matcher);
+  const std::vector<Match> matches = MatchPoints(old.Detection(), detection, options_.matcher);
   VLOG(2) << "place recognition: keyframe " << old.frame << " (" << old.size() << " points): "
           << matches.size() << " matches";
   if (static_cast<int>(matches.size()) < options_.min_inliers) return std::nullopt;
@@ -199,7 +199,7 @@ std::optional<PlaceMatch> PlaceRecognition::VerifyMono(const KeyframeEntry& old,
                                                        const std::vector<Match>& matches) const {
   std::vector<Eigen::Vector2d> uv_old, uv_cur;
   for (const Match& m : matches) {
-    uv_old.push_back(old.points.points[m.i].uv);
+    uv_old.push_back(old.points[m.i].uv);
     uv_cur.push_back(detection.points[m.j].uv);
   }
   // A revisit from nearly the same viewpoint leaves the epipolar geometry degenerate: the
@@ -255,9 +255,9 @@ void PlaceRecognition::AddSavedKeyframe(const SavedKeyframe& keyframe, int patch
   e.global_descriptor = cv::Mat(options_.thumbnail_height, options_.thumbnail_width, CV_32F,
                                 const_cast<float*>(keyframe.thumbnail.data()))
                             .clone();
-  e.points.patch_size = patch_size;
-  e.points.patch_spacing = patch_spacing;
-  e.points.image_size = cv::Size(rig_.left.width, rig_.left.height);
+  e.patch_size = patch_size;
+  e.patch_spacing = patch_spacing;
+  e.image_size = cv::Size(rig_.left.width, rig_.left.height);
   const Pose T_c_w = keyframe.T_w_c.inverse();
   std::vector<const SavedKeyframePoint*> rows;
   for (const SavedKeyframePoint& p : keyframe.points) {
@@ -266,7 +266,7 @@ void PlaceRecognition::AddSavedKeyframe(const SavedKeyframe& keyframe, int patch
     CHECK_EQ(p.descriptor.size(), static_cast<size_t>(patch_size * patch_size));
     rows.push_back(&p);
   }
-  e.points.descriptors.create(static_cast<int>(rows.size()), patch_size * patch_size, CV_32F);
+  e.descriptors = QuantizedDescriptors(patch_size * patch_size);
   for (size_t k = 0; k < rows.size(); ++k) {
     const SavedKeyframePoint& p = *rows[k];
     InterestPoint ip;
@@ -275,9 +275,8 @@ void PlaceRecognition::AddSavedKeyframe(const SavedKeyframe& keyframe, int patch
     ip.scale = p.scale;
     ip.lambda1 = p.lambda1;
     ip.lambda2 = p.lambda2;
-    e.points.points.push_back(ip);
-    std::copy(p.descriptor.begin(), p.descriptor.end(),
-              e.points.descriptors.ptr<float>(static_cast<int>(k)));
+    e.points.push_back(ip);
+    e.descriptors.AppendQuantized(p.descriptor.data());
     e.landmark.push_back(p.landmark);
     std::optional<StereoPoint> point;
     const auto it = p_w.find(p.landmark);

@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/io/atomic_file.h"
+#include "core/quantized_descriptors.h"
 
 namespace dala {
 namespace {
@@ -164,8 +165,7 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
         w.Put(p.scale);
         w.Put(p.lambda1);
         w.Put(p.lambda2);
-        w.PutRaw(reinterpret_cast<const char*>(p.descriptor.data()),
-                 p.descriptor.size() * sizeof(float));
+        w.PutRaw(reinterpret_cast<const char*>(p.descriptor.data()), p.descriptor.size());
       }
     }
     w.Put<uint64_t>(map.landmarks.size());
@@ -200,10 +200,12 @@ SavedMap ReadMapFile(const std::string& path) {
   }
   uint32_t version;
   std::memcpy(&version, bytes.data() + sizeof(kMagic), sizeof(version));
-  if (version != MapFileVersion::kCurrent) {
-    throw Error() << path << ": map file version " << version << "; this build reads version "
-                  << MapFileVersion::kCurrent << " only (save the map again with this build)";
+  if (version != MapFileVersion::kCurrent && version != MapFileVersion::kFloatDescriptors) {
+    throw Error() << path << ": map file version " << version << "; this build reads versions "
+                  << MapFileVersion::kFloatDescriptors << " and " << MapFileVersion::kCurrent
+                  << " only (save the map again with this build)";
   }
+  const bool float_descriptors = version == MapFileVersion::kFloatDescriptors;
   const size_t body = bytes.size() - sizeof(uint64_t);
   uint64_t stored_hash;
   std::memcpy(&stored_hash, bytes.data() + body, sizeof(stored_hash));
@@ -223,7 +225,9 @@ SavedMap ReadMapFile(const std::string& path) {
       throw Error() << path << ": implausible descriptor size " << descriptor_size;
     }
     map.descriptor_size = static_cast<int>(descriptor_size);
-    const size_t point_bytes = 8 + 16 + 16 + 4 * static_cast<size_t>(map.descriptor_size);
+    const size_t point_bytes =
+        8 + 16 + 16 + (float_descriptors ? 4 : 1) * static_cast<size_t>(map.descriptor_size);
+    std::vector<float> float_descriptor(map.descriptor_size);
     const uint64_t num_keyframes = r.GetCount("keyframes", 8 + 8 + 56 + 8);
     map.keyframes.resize(num_keyframes);
     for (SavedKeyframe& kf : map.keyframes) {
@@ -240,7 +244,14 @@ SavedMap ReadMapFile(const std::string& path) {
         p.lambda1 = r.Get<float>("a point");
         p.lambda2 = r.Get<float>("a point");
         p.descriptor.resize(map.descriptor_size);
-        for (float& d : p.descriptor) d = r.Get<float>("a descriptor");
+        if (float_descriptors) {
+          for (float& d : float_descriptor) d = r.Get<float>("a descriptor");
+          if (map.descriptor_size > 0) {
+            QuantizeDescriptor(float_descriptor.data(), map.descriptor_size, p.descriptor.data());
+          }
+        } else {
+          for (int8_t& d : p.descriptor) d = r.Get<int8_t>("a descriptor");
+        }
       }
     }
     map.landmarks.resize(r.GetCount("landmarks", 8 + 24 + 4));

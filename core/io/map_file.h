@@ -5,17 +5,17 @@
 // points (landmark id, position, orientation, scale and the matcher's patch descriptor), and the
 // landmarks in the world frame. It holds what place recognition and relocalisation need.
 //
-// Binary format, version 2 (little-endian, IEEE floats; docs/api.md gives the same table):
+// Binary format, version 3 (little-endian, IEEE floats; docs/api.md gives the same table):
 //   char[8]  magic "DALAMAP\0"
-//   uint32   version (2)
-//   uint32   descriptor_size D (floats per descriptor; 0 when the map has none)
+//   uint32   version (3)
+//   uint32   descriptor_size D (samples per descriptor; 0 when the map has none)
 //   uint64   keyframe count, then per keyframe:
 //              int64 frame id, int64 t_ns, float64[7] T_w_c as (qx qy qz qw tx ty tz),
 //              uint64 point count, then per point:
 //                int64 landmark id (-1: none), float64[2] uv (left image pixels),
 //                float32 orientation (rad), float32 scale, float32[2] the Harris matrix's
 //                eigenvalues (largest first; the matcher compares their ratio),
-//                float32[D] descriptor
+//                int8[D] descriptor (the patch at 8 bits, core/quantized_descriptors.h)
 //   uint64   landmark count, then per landmark: int64 id, float64[3] p_w, int32 observations
 //   uint32   metric: 1 when the map's unit is the metre (stereo), 0 when it is arbitrary (one
 //            camera: the unit of its two-view initialisation)
@@ -23,8 +23,9 @@
 //            keyframe, in the order above: float32[W*H] thumbnail (place recognition's global
 //            descriptor, row-major), what ranks the keyframes when a run relocalises in the map
 //   uint64   FNV-1a 64 hash of every preceding byte (detects truncation and corruption)
-// A reader accepts exactly the versions it knows and says which ones when it meets another
-// (version 1, before the metric flag and the thumbnails, is refused: save the map again).
+// A reader accepts exactly the versions it knows and says which ones when it meets another:
+// version 2 (the same with float32[D] descriptors) is read and its descriptors quantised;
+// version 1, before the metric flag and the thumbnails, is refused (save the map again).
 
 #include <cstdint>
 #include <string>
@@ -38,9 +39,10 @@
 namespace dala {
 
 struct MapFileVersion {
-  static constexpr uint32_t kCurrent = 2;
+  static constexpr uint32_t kCurrent = 3;
+  static constexpr uint32_t kFloatDescriptors = 2;  // Read, never written.
 };
-// What the reader accepts (and the writer refuses beyond): floats per descriptor, thumbnail side.
+// What the reader accepts (and the writer refuses beyond): samples per descriptor, thumbnail side.
 constexpr uint32_t kMaxDescriptorSize = 4096;
 constexpr uint32_t kMaxThumbnailSide = 1024;
 
@@ -51,7 +53,9 @@ struct SavedKeyframePoint {
   float scale = 1.f;
   float lambda1 = 0.f;  // The Harris matrix's eigenvalues (frontend/harris.h).
   float lambda2 = 0.f;
-  std::vector<float> descriptor;  // descriptor_size floats (or empty when the map has none).
+  // descriptor_size samples (or empty when the map has none): the matcher's patch at 8 bits
+  // (core/quantized_descriptors.h; ExpandDescriptor gives the floats back).
+  std::vector<int8_t> descriptor;
 };
 
 struct SavedKeyframe {

@@ -184,7 +184,7 @@ TEST(RunInSavedMap, UnsuitableMapsAreRefusedWithTheReason) {
   good.uv = Eigen::Vector2d(100, 100);
   good.lambda1 = 900;
   good.lambda2 = 300;
-  good.descriptor.assign(121, 0.1f);
+  good.descriptor.assign(121, static_cast<int8_t>(13));
   SavedMap with_point = map;
   with_point.keyframes[0].points.push_back(good);
   EXPECT_EQ(error_of(with_point, BaOptions("stereo")), "no error");

@@ -48,7 +48,9 @@ SavedMap MakeMap(int descriptor_size) {
       p.scale = 1.41421356f;
       p.lambda1 = 900.f + i;
       p.lambda2 = 300.f - i;
-      for (int d = 0; d < descriptor_size; ++d) p.descriptor.push_back(static_cast<float>(n(rng)));
+      for (int d = 0; d < descriptor_size; ++d) {
+        p.descriptor.push_back(static_cast<int8_t>(std::clamp(10.0 * n(rng), -127.0, 127.0)));
+      }
       kf.points.push_back(p);
     }
     map.keyframes.push_back(kf);
@@ -299,8 +301,8 @@ TEST(MapFileTest, ExtremeCountsWithAValidChecksumAreErrors) {
   }
 }
 
-// The fuzzer's seeds (tests/fuzz/corpus/map_file_fuzzer) are maps of the current version, so
-// that fuzzing starts from inputs that reach every field.
+// The fuzzer's seeds (tests/fuzz/corpus/map_file_fuzzer) are maps of the versions the reader
+// accepts, so that fuzzing starts from inputs that reach every field.
 TEST(MapFileTest, FuzzSeedsAreValidMaps) {
   const std::filesystem::path dir =
       std::filesystem::path(DALA_SOURCE_DIR) / "tests/fuzz/corpus/map_file_fuzzer";
@@ -313,6 +315,20 @@ TEST(MapFileTest, FuzzSeedsAreValidMaps) {
   const SavedMap d4 = ReadMapFile((dir / "two_keyframes_d4.dmap").string());
   EXPECT_EQ(d4.thumbnail_width * d4.thumbnail_height, 4);
   EXPECT_EQ(d4.keyframes.at(1).points.at(1).lambda1, 901.f);
+  // two_keyframes_d4.dmap is version 2 (float descriptors), two_keyframes_d4_v3.dmap the same
+  // map written again by this build: the reader quantises version 2's descriptors as the writer
+  // of version 3 stores them.
+  EXPECT_EQ(ReadBytes((dir / "two_keyframes_d4.dmap").string())[8], 2);
+  EXPECT_EQ(ReadBytes((dir / "two_keyframes_d4_v3.dmap").string())[8], 3);
+  const SavedMap v3 = ReadMapFile((dir / "two_keyframes_d4_v3.dmap").string());
+  ASSERT_EQ(v3.keyframes.size(), d4.keyframes.size());
+  for (size_t k = 0; k < v3.keyframes.size(); ++k) {
+    ASSERT_EQ(v3.keyframes[k].points.size(), d4.keyframes[k].points.size());
+    for (size_t i = 0; i < v3.keyframes[k].points.size(); ++i) {
+      EXPECT_EQ(v3.keyframes[k].points[i].descriptor, d4.keyframes[k].points[i].descriptor);
+      EXPECT_EQ(v3.keyframes[k].points[i].descriptor.size(), 4u);
+    }
+  }
 }
 
 TEST(MapFileTest, DescriptorSizeMismatchIsRefusedAndWritesNothing) {

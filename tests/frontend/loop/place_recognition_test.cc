@@ -251,7 +251,7 @@ TEST(KeyframeDatabase, AddFindAndOrder) {
   KeyframeDatabase db;
   KeyframeEntry e;
   e.frame = FrameId(3);
-  e.points.descriptors = cv::Mat(0, 121, CV_32F);
+  e.descriptors = QuantizedDescriptors(121);
   db.Add(e);
   e.frame = FrameId(7);
   db.Add(e);
