@@ -101,6 +101,7 @@ TrackResult System::Track(const Frame& frame) {
   s.valid = e.valid;
   s.note = e.note;
   s.keyframe = m.is_keyframe;
+  s.places = static_cast<int>(places());
   s.features = static_cast<int>(m.observations.size());
   for (const FeatureObservation& o : m.observations) s.tracked += o.track_length > 1;
   s.landmarks = e.landmarks_in_state;
@@ -112,7 +113,10 @@ TrackResult System::Track(const Frame& frame) {
   stats_.push_back(s);
   // A mono keyframe the estimator could not place is no keyframe of the map (it has a guessed
   // pose); a stereo one always joins the window.
-  if (m.is_keyframe && (e.valid || rig_.is_stereo())) RecordKeyframe(frame.left);
+  // A keyframe whose place an older keyframe holds (one entry per place) is not saved twice.
+  if (m.is_keyframe && (e.valid || rig_.is_stereo()) && !frontend_->keyframe_place_held_by()) {
+    RecordKeyframe(frame.left);
+  }
 
   TrackResult r;
   r.status = s.status;

@@ -47,6 +47,7 @@ struct FrameStats {
   bool valid = false;
   bool skipped = false;  // Its images could not be read (SkipFrame): lost, no pose.
   bool keyframe = false;
+  int places = 0;  // Place-recognition entries after this frame (System::places()).
   int features = 0;
   int tracked = 0;           // Observations continuing a track.
   int landmarks = 0;         // In the estimator's state.
@@ -88,12 +89,15 @@ class System {
   // a mono run leaves out the frames before its initialisation (stats() says which).
   Trajectory trajectory() const { return estimator_->trajectory(); }
   std::vector<MapPoint> map() const { return estimator_->map(); }
-  // Every keyframe so far (the frames the frontend chose), in order, with its current pose
+  // Every keyframe so far (the frames the frontend chose) but those whose place an older one
+  // holds (PlaceRecognitionOptions::one_entry_per_place), in order, with its current pose
   // (corrected by later optimisation) and its points that belong to a landmark (older than
   // kRecordPruneAge keyframes: to a landmark of the map): position, orientation, scale and
   // patch descriptor (frontend/harris.h).
   std::vector<SavedKeyframe> keyframes() const;
   const std::vector<FrameStats>& stats() const { return stats_; }
+  // Places the place recognition stores (one per keyframe, but one per place on revisits).
+  size_t places() const { return frontend_->place_recognition().database().size(); }
 
   // The map as saved: keyframes (poses, points, descriptors) and landmarks (core/io/map_file.h
   // gives the versioned binary format). Throws dala::Error when the file cannot be written.

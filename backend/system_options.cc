@@ -121,6 +121,9 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("loop", "mono_gate_fraction", &l.mono_gate_fraction);
   v->Field("loop", "relocalise", &l.relocalise);
   v->Field("loop", "relocalise_below_mapped", &l.relocalise_below_mapped);
+  v->Field("loop", "one_entry_per_place", &l.one_entry_per_place);
+  v->Field("loop", "place_min_inlier_fraction", &l.place_min_inlier_fraction);
+  v->Field("loop", "place_prior_radius_px", &l.place_prior_radius_px);
   SlidingWindowEstimatorOptions& b = o->ba;
   v->Field("ba", "window_size", &b.ba.window_size);
   v->Field("ba", "use_marginalization", &b.ba.use_marginalization);

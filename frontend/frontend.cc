@@ -359,7 +359,15 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
       << stats.best_score << " (frame " << stats.best_frame << ")"
       << (stats.rejected_by_gate ? ", a PnP pose outside the gate" : "")
       << (match ? ", loop to frame " + std::to_string(match->loop.old_frame.value) : "");
-  place_recognition_.Add(std::move(entry));
+  // One entry per place: a keyframe whose place an older entry holds adds no entry.
+  keyframe_place_held_by_ =
+      place_recognition_.HeldBy(entry, match, cur->detection, cur->stereo, cur->landmark);
+  if (keyframe_place_held_by_) {
+    VLOG(2) << "frame " << frame.id << ": its place is held by keyframe "
+            << *keyframe_place_held_by_ << "'s entry; not stored again";
+  } else {
+    place_recognition_.Add(std::move(entry));
+  }
   if (!match) return std::nullopt;
   return match->loop;
 }
@@ -530,6 +538,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   // 5. Loop detection at keyframes (relabels the recognised points before they are output).
   // Not after a loss: the dead-reckoned pose that gates a loop is an extrapolation then, and a
   // recognised place has already relabelled the points (RelocalizeFromDatabase).
+  if (out.is_keyframe) keyframe_place_held_by_.reset();
   if (out.is_keyframe && options_.loop.enable && !lost_before &&
       (stereo || (prev_ && local_map_search_.has_map()))) {
     t0 = Clock::now();

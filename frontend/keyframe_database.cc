@@ -39,4 +39,11 @@ const KeyframeEntry* KeyframeDatabase::Find(FrameId frame) const {
   return it != entries_.end() && it->frame == frame ? &*it : nullptr;
 }
 
+std::optional<size_t> KeyframeDatabase::IndexOf(FrameId frame) const {
+  const auto it = std::lower_bound(entries_.begin(), entries_.end(), frame,
+                                   [](const KeyframeEntry& e, FrameId f) { return e.frame < f; });
+  if (it == entries_.end() || it->frame != frame) return std::nullopt;
+  return static_cast<size_t>(it - entries_.begin());
+}
+
 }  // namespace dala

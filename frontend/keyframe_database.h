@@ -69,6 +69,8 @@ class KeyframeDatabase {
   bool empty() const { return entries_.empty(); }
   // nullptr when `frame` is not a keyframe of the database.
   const KeyframeEntry* Find(FrameId frame) const;
+  // The position of `frame`'s entry in entries(), or nullopt.
+  std::optional<size_t> IndexOf(FrameId frame) const;
   void Clear() { entries_.clear(); }
 
  private:

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <unordered_set>
 
@@ -46,6 +47,9 @@ bool PlaceRecognitionOptions::IsValid(std::string* why) const {
   if (keyframes_between_loops < 0) return fail("loop.keyframes_between_loops must be >= 0");
   if (!(mono_gate_fraction > 0.0)) return fail("loop.mono_gate_fraction must be > 0");
   if (relocalise_below_mapped < 0) return fail("loop.relocalise_below_mapped must be >= 0");
+  if (!(place_min_inlier_fraction >= 0.0 && place_min_inlier_fraction <= 1.0))
+    return fail("loop.place_min_inlier_fraction must be in [0, 1]");
+  if (!(place_prior_radius_px > 0.0)) return fail("loop.place_prior_radius_px must be > 0");
   if (mono_max_entry_points < min_inliers)
     return fail("loop.mono_max_entry_points must be >= loop.min_inliers");
   return true;
@@ -158,10 +162,24 @@ bool PlaceRecognition::WithinGate(const KeyframeEntry& old, const KeyframeEntry&
 std::optional<PlaceMatch> PlaceRecognition::Verify(
     const KeyframeEntry& old, const KeyframeEntry& query, const DetectedImage& detection,
     const std::vector<std::optional<StereoPoint>>& stereo, const std::vector<LandmarkId>& landmark,
-    bool* rejected_by_gate, bool gate) const {
+    bool* rejected_by_gate, bool gate, const std::optional<Pose>& T_old_cur_guess) const {
   if (rejected_by_gate) *rejected_by_gate = false;
   if (static_cast<int>(old.size()) < options_.min_inliers) return std::nullopt;
-  const std::vector<Match> matches = MatchPoints(old.Detection(), detection, options_.matcher);
+  std::optional<MatchPrior> prior;
+  if (T_old_cur_guess && rig_.is_stereo()) {
+    const Pose T_cur_old = T_old_cur_guess->inverse();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::vector<Eigen::Vector2d> predicted(old.size(), Eigen::Vector2d(nan, nan));
+    for (size_t k = 0; k < old.size(); ++k) {
+      Eigen::Vector2d uv;
+      if (old.stereo[k] && rig_.left.Project(T_cur_old * old.stereo[k]->p_c0, &uv)) {
+        predicted[k] = uv;
+      }
+    }
+    prior = MatchPrior::Predicted(std::move(predicted), options_.place_prior_radius_px);
+  }
+  const std::vector<Match> matches =
+      MatchPoints(old.Detection(), detection, options_.matcher, prior ? &*prior : nullptr);
   VLOG(2) << "place recognition: keyframe " << old.frame << " (" << old.size() << " points): "
           << matches.size() << " matches";
   if (static_cast<int>(matches.size()) < options_.min_inliers) return std::nullopt;
@@ -371,6 +389,48 @@ std::optional<PlaceMatch> PlaceRecognition::Detect(
       Search(query, detection, stereo, landmark, /*relocalisation=*/false);
   if (found) keyframes_since_loop_ = 0;
   return found;
+}
+
+std::optional<FrameId> PlaceRecognition::HeldBy(
+    const KeyframeEntry& query, const std::optional<PlaceMatch>& loop,
+    const DetectedImage& detection, const std::vector<std::optional<StereoPoint>>& stereo,
+    const std::vector<LandmarkId>& landmark) {
+  const std::optional<FrameId> previous = last_holder_;
+  last_holder_.reset();
+  if (!options_.one_entry_per_place) return std::nullopt;
+  const double min_inliers = std::max<double>(
+      options_.min_inliers, options_.place_min_inlier_fraction * static_cast<double>(query.size()));
+  const Pose T_w_prev = last_query_T_w_c_;
+  last_query_T_w_c_ = query.T_w_c;
+  if (loop && loop->loop.inliers >= min_inliers) {
+    last_holder_ = loop->loop.old_frame;
+    last_holder_T_old_prev_ = loop->loop.T_old_cur;
+    return last_holder_;
+  }
+  if (!previous) return std::nullopt;
+  const std::optional<size_t> at = database_.IndexOf(*previous);
+  if (!at) return std::nullopt;
+  const KeyframeEntry& holder = database_.entries()[*at];
+  // The old path's next keyframe first, then the same one, then two and three ahead.
+  for (const int step : {1, 0, 2, 3}) {
+    const size_t i = *at + step;
+    if (i >= database_.size()) break;
+    const KeyframeEntry& old = database_.entries()[i];
+    if (query.frame.value - old.frame.value < options_.min_frame_gap) break;
+    ++stats_.place_checks;
+    // T_old_cur = T_old_holder (old lap's dead reckoning) * T_holder_prev (verified)
+    //             * T_prev_cur (this lap's dead reckoning): each a short, local motion.
+    const Pose guess = old.T_w_c.inverse() * holder.T_w_c * last_holder_T_old_prev_ *
+                       T_w_prev.inverse() * query.T_w_c;
+    const std::optional<PlaceMatch> held =
+        Verify(old, query, detection, stereo, landmark, nullptr, true, guess);
+    if (held && held->loop.inliers >= min_inliers) {
+      last_holder_ = old.frame;
+      last_holder_T_old_prev_ = held->loop.T_old_cur;
+      return last_holder_;
+    }
+  }
+  return std::nullopt;
 }
 
 std::optional<PlaceMatch> PlaceRecognition::Relocalize(

@@ -94,6 +94,20 @@ struct PlaceRecognitionOptions {
   // points (its mapped landmarks first, then the strongest corners: ~0.24 MB per keyframe).
   double mono_gate_fraction = 0.05;
   int mono_max_entry_points = 500;
+  // One entry per place (issue 14: memory bounded by the place, not the time): a keyframe whose
+  // place an older entry already holds is not added to the database (HeldBy). Held: an entry
+  // at least min_frame_gap frames old verifies it as a loop would (matcher, PnP or the
+  // essential matrix, the spatial gate), with at least min_inliers inliers and
+  // place_min_inlier_fraction of the keyframe's own entry points. The entries tried: the one a
+  // loop just matched, else the neighbours in time of the entry that held the previous
+  // keyframe (a revisit follows the old path). The keyframe stays a keyframe of the
+  // estimator; only its appearance is not stored twice.
+  bool one_entry_per_place = true;
+  double place_min_inlier_fraction = 0.3;
+  // Stereo: the held chain predicts where the old entry's points land (the previous keyframe's
+  // verified pose and both laps' dead reckoning) and the matcher searches this radius around
+  // each prediction instead of the whole image (~10x less work per verification).
+  double place_prior_radius_px = 30.0;
   // Relocalisation (Relocalize): after a frame the estimator lost, the whole database is
   // searched for the current place, with neither the spatial gate nor min_frame_gap (the pose
   // after a loss is unknown, and any mapped place will do).
@@ -122,6 +136,7 @@ struct PlaceRecognitionStats {
   double best_score = -1.0;     // Best appearance score among the old-enough entries.
   FrameId best_frame;           // Its keyframe.
   int best_inliers = 0;         // Inliers of the accepted loop (0: none).
+  int place_checks = 0;         // Verifications of HeldBy.
   bool rejected_by_gate = false;  // A candidate passed PnP but its pose failed the gate.
   double ms = 0.0;              // Wall time of Detect().
 };
@@ -157,12 +172,23 @@ class PlaceRecognition {
                                        const std::vector<LandmarkId>& landmark);
 
   // Verifies one old entry against the current keyframe (matcher + PnP, and the spatial gate
-  // when `gate`), regardless of appearance. Exposed for tests and tools.
+  // when `gate`), regardless of appearance. Exposed for tests and tools. With a guess of the
+  // current camera in the old one (stereo), the matcher searches place_prior_radius_px around
+  // each old point's predicted position only.
   std::optional<PlaceMatch> Verify(const KeyframeEntry& old, const KeyframeEntry& query,
                                    const DetectedImage& detection,
                                    const std::vector<std::optional<StereoPoint>>& stereo,
                                    const std::vector<LandmarkId>& landmark,
-                                   bool* rejected_by_gate = nullptr, bool gate = true) const;
+                                   bool* rejected_by_gate = nullptr, bool gate = true,
+                                   const std::optional<Pose>& T_old_cur_guess = std::nullopt) const;
+
+  // Whether an older entry already holds the place of `query` (see one_entry_per_place): its
+  // frame, or nullopt. Call once per keyframe, after Detect (`loop`: what it returned); the
+  // caller then leaves `query` out of the database.
+  std::optional<FrameId> HeldBy(const KeyframeEntry& query, const std::optional<PlaceMatch>& loop,
+                                const DetectedImage& detection,
+                                const std::vector<std::optional<StereoPoint>>& stereo,
+                                const std::vector<LandmarkId>& landmark);
 
   void Add(KeyframeEntry entry) { database_.Add(std::move(entry)); }
   // A keyframe of a saved map (core/io/map_file.h) for relocalisation only (loop detection
@@ -217,6 +243,11 @@ class PlaceRecognition {
   KeyframeDatabase saved_map_;  // AddSavedKeyframe.
   PlaceRecognitionStats stats_;
   int keyframes_since_loop_ = 1 << 30;
+  // The entry that held the previous keyframe's place, the previous keyframe in that entry's
+  // camera (the verified pose), and the previous keyframe's dead-reckoned pose.
+  std::optional<FrameId> last_holder_;
+  Pose last_holder_T_old_prev_ = Pose::Identity();
+  Pose last_query_T_w_c_ = Pose::Identity();
 };
 
 }  // namespace dala

@@ -104,6 +104,7 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"valid", s.valid},
           {"skipped", s.skipped},
           {"keyframe", s.keyframe},
+          {"places", s.places},
           {"features", s.features},
           {"tracked", s.tracked},
           {"landmarks", s.landmarks},
@@ -294,6 +295,8 @@ int RunRun(const std::vector<std::string>& args) {
       // "scale" is the evaluation's Sim(3) scale (below): what fixes the map's unit is this.
       {"scale_source", system.ScaleDescription()},
       {"keyframes", keyframes},
+      // Keyframes with an entry in the place recognition (one per place on revisits).
+      {"places", system.places()},
       {"loops_detected", loops},
       {"loops_closed", loops_closed},
       {"loop_ms_per_keyframe",
@@ -357,25 +360,31 @@ int RunRun(const std::vector<std::string>& args) {
   summary["peak_rss_mb"] = peak_rss_mb;
   {
     bench::ChartSeries keyframe_curve{"keyframes", {}, {}};
+    // One entry per place (docs/backend.md): what the memory follows on revisits.
+    bench::ChartSeries place_curve{"places stored", {}, {}};
     bench::ChartSeries rss_curve{"resident memory", {}, {}};
     int keyframes_so_far = 0;
+    int places_so_far = 0;
     for (size_t i = 0; i < stats.size(); ++i) {
       keyframes_so_far += stats[i].keyframe;
+      if (!stats[i].skipped) places_so_far = stats[i].places;
       keyframe_curve.x.push_back(static_cast<double>(i));
       keyframe_curve.y.push_back(keyframes_so_far);
+      place_curve.x.push_back(static_cast<double>(i));
+      place_curve.y.push_back(places_so_far);
       if (i < rss_mb.size()) {
         rss_curve.x.push_back(static_cast<double>(i));
         rss_curve.y.push_back(rss_mb[i]);
       }
     }
     bench::LineChartOptions top, bottom;
-    top.title = "keyframes so far";
+    top.title = "keyframes and stored places so far";
     top.x_label = "frame";
-    top.y_label = "keyframes";
+    top.y_label = "count";
     bottom.title = "resident memory of the process";
     bottom.x_label = "frame";
     bottom.y_label = "MiB";
-    bench::DrawStackedLineCharts({{{keyframe_curve}, top}, {{rss_curve}, bottom}},
+    bench::DrawStackedLineCharts({{{keyframe_curve, place_curve}, top}, {{rss_curve}, bottom}},
                                  dir + "/memory.png");
   }
   const nlohmann::json report = {
@@ -405,7 +414,8 @@ int RunRun(const std::vector<std::string>& args) {
               << "\n";
   }
   std::cout << "memory      " << std::fixed << std::setprecision(0) << peak_rss_mb
-            << " MiB peak resident, " << keyframes << " keyframes (memory.png)\n";
+            << " MiB peak resident, " << keyframes << " keyframes, " << system.places()
+            << " places stored (memory.png)\n";
   std::cout << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
             << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {

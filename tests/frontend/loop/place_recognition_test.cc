@@ -127,6 +127,61 @@ TEST(PlaceRecognition, FindsTheRevisitAndItsPose) {
   EXPECT_EQ(pr.last_stats().searched, 0);
 }
 
+// One entry per place (issue 14): on the second lap of the rover loop, the keyframe that closes
+// the loop is held by the old keyframe it matched, and the next ones by the old path's next
+// keyframes, so none of them needs an entry of its own; a keyframe where no old one is near is
+// not held, nor is any with the option off.
+TEST(PlaceRecognition, OneEntryPerPlaceFollowsTheOldPath) {
+  sim::SimOptions o;
+  o.preset = "rover_loop";
+  o.frames = 1060;  // One lap is 1000 frames.
+  const sim::SyntheticSequence seq(o);
+  PlaceRecognitionOptions options;
+  PlaceRecognition pr(seq.rig(), options);
+  PlaceRecognitionOptions off = options;
+  off.one_entry_per_place = false;
+  PlaceRecognition pr_off(seq.rig(), off);
+  const double m_per_frame = 1.0 / o.fps;  // Only the spatial gate reads the path: generous.
+  for (size_t i = 0; i <= 60; i += 6) {
+    const View v = MakeView(seq, i, 100000 * static_cast<int64_t>(i + 1));
+    pr.Add(Entry(pr, v, v.T_w_c, m_per_frame * i));
+    pr_off.Add(Entry(pr_off, v, v.T_w_c, m_per_frame * i));
+  }
+  // Far from every entry (frame 500, half-way round): not held.
+  const View far = MakeView(seq, 500, 800000000);
+  const KeyframeEntry far_query = Entry(pr, far, far.T_w_c, m_per_frame * 500);
+  const std::optional<PlaceMatch> no_loop =
+      pr.Detect(far_query, far.detection, far.stereo, far.landmark);
+  EXPECT_FALSE(no_loop.has_value());
+  EXPECT_FALSE(pr.HeldBy(far_query, no_loop, far.detection, far.stereo, far.landmark));
+
+  std::vector<int64_t> holders;
+  for (size_t i = 1000; i <= 1030; i += 6) {
+    const View cur = MakeView(seq, i, 900000000 + 10000 * static_cast<int64_t>(i));
+    const KeyframeEntry query = Entry(pr, cur, cur.T_w_c, m_per_frame * i);
+    const std::optional<PlaceMatch> loop =
+        pr.Detect(query, cur.detection, cur.stereo, cur.landmark);
+    const std::optional<FrameId> held =
+        pr.HeldBy(query, loop, cur.detection, cur.stereo, cur.landmark);
+    ASSERT_TRUE(held.has_value()) << "frame " << i;
+    holders.push_back(held->value);
+    // The holder is the old keyframe nearest the current one along the path (within 6 frames).
+    EXPECT_LE(std::abs(static_cast<int64_t>(i - 1000) - held->value), 6) << "frame " << i;
+    if (i == 1000) {
+      ASSERT_TRUE(loop.has_value());
+    } else {
+      EXPECT_FALSE(loop.has_value());  // keyframes_between_loops: no loop search, yet held.
+    }
+    const KeyframeEntry query_off = Entry(pr_off, cur, cur.T_w_c, m_per_frame * i);
+    const std::optional<PlaceMatch> loop_off =
+        pr_off.Detect(query_off, cur.detection, cur.stereo, cur.landmark);
+    EXPECT_FALSE(pr_off.HeldBy(query_off, loop_off, cur.detection, cur.stereo, cur.landmark));
+  }
+  std::cout << "[ measured ] holders:";
+  for (int64_t h : holders) std::cout << " " << h;
+  std::cout << std::endl;
+}
+
 // One camera: the keyframes keep their points without depth, and the revisit is verified by
 // the epipolar geometry (or a rotation's homography); the gate is a fraction of the path in map
 // units. The relabelled points must be keyframe 0's, and the model's rotation the true one.
