@@ -89,6 +89,55 @@ TEST(LoopClosureE2e, SmallLoopIsClosedAndAteDrops) {
   EXPECT_LT(run.eval.ate.translation.rmse / path, 1.5 * 0.00024);  // Measured: 0.024 %.
 }
 
+// One entry per place (issue 14, memory bounded by the place): the small loop at 3 Hz driven
+// for 1.5 laps. After the revisit is recognised, the second lap's keyframes are held by the
+// first lap's place-recognition entries: the keyframes go on, the stored places (and the
+// saved map's keyframes) nearly stop, and the trajectory is as good as with an entry each.
+TEST(LoopClosureE2e, RevisitStoresNoNewPlaces) {
+  sim::SimOptions sim;
+  sim.preset = "small_loop";
+  sim.fps = 3.0;
+  sim.frames = 225;  // One lap is 150 frames.
+  sim.width = 480;
+  sim.height = 320;
+  sim.fx = sim.fy = 290.0;
+  sim.seed = 3;
+  const sim::SyntheticSequence seq(sim);
+  EvalResult eval[2];
+  for (const bool one_per_place : {true, false}) {
+    SystemOptions options;
+    options.frontend.loop.one_entry_per_place = one_per_place;
+    System system(seq.rig(), options);
+    int keyframes_at_loop = -1, places_at_loop = -1, keyframes = 0;
+    for (size_t i = 0; i < seq.size(); ++i) {
+      system.Track(seq.Render(i));
+      const FrameStats& s = system.stats().back();
+      keyframes += s.keyframe;
+      if (s.loop && keyframes_at_loop < 0) {
+        keyframes_at_loop = keyframes;
+        places_at_loop = s.places;
+      }
+    }
+    ASSERT_GE(keyframes_at_loop, 0) << "the revisit was not recognised";
+    const int new_keyframes = keyframes - keyframes_at_loop;
+    const int new_places = static_cast<int>(system.places()) - places_at_loop;
+    eval[one_per_place] = Evaluate(seq.ground_truth(), system.trajectory(), EvalOptions());
+    ASSERT_TRUE(eval[one_per_place].ok) << eval[one_per_place].error;
+    std::cout << "[ measured ] one entry per place " << one_per_place << ": after the first loop "
+              << new_keyframes << " keyframes, " << new_places << " places stored; "
+              << system.keyframes().size() << " saved keyframes of " << keyframes << "; ATE "
+              << eval[one_per_place].ate.translation.rmse << " m" << std::endl;
+    ASSERT_GE(new_keyframes, 20);
+    if (one_per_place) {
+      EXPECT_LE(new_places, new_keyframes / 5);
+      EXPECT_LT(system.keyframes().size(), static_cast<size_t>(keyframes - new_keyframes / 2));
+    } else {
+      EXPECT_EQ(new_places, new_keyframes);
+    }
+  }
+  EXPECT_LT(eval[1].ate.translation.rmse, 1.2 * eval[0].ate.translation.rmse);
+}
+
 // One camera: the small loop (500 frames, ~124 m) from the left images. The revisit is
 // recognised and closed over Sim(3) (the current keyframe placed by PnP on the old landmarks,
 // the scale from the recognised landmarks mapped on both sides). Measured: Sim(3) ATE 0.0576 m
