@@ -34,9 +34,8 @@ DetectedImage KeyframeEntry::Detection() const {
 }
 
 const KeyframeEntry* KeyframeDatabase::Find(FrameId frame) const {
-  const auto it = std::lower_bound(entries_.begin(), entries_.end(), frame,
-                                   [](const KeyframeEntry& e, FrameId f) { return e.frame < f; });
-  return it != entries_.end() && it->frame == frame ? &*it : nullptr;
+  const std::optional<size_t> i = IndexOf(frame);
+  return i ? &entries_[*i] : nullptr;
 }
 
 std::optional<size_t> KeyframeDatabase::IndexOf(FrameId frame) const {

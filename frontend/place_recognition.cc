@@ -417,7 +417,6 @@ std::optional<FrameId> PlaceRecognition::HeldBy(
     if (i >= database_.size()) break;
     const KeyframeEntry& old = database_.entries()[i];
     if (query.frame.value - old.frame.value < options_.min_frame_gap) break;
-    ++stats_.place_checks;
     // T_old_cur = T_old_holder (old lap's dead reckoning) * T_holder_prev (verified)
     //             * T_prev_cur (this lap's dead reckoning): each a short, local motion.
     const Pose guess = old.T_w_c.inverse() * holder.T_w_c * last_holder_T_old_prev_ *

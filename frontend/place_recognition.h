@@ -136,7 +136,6 @@ struct PlaceRecognitionStats {
   double best_score = -1.0;     // Best appearance score among the old-enough entries.
   FrameId best_frame;           // Its keyframe.
   int best_inliers = 0;         // Inliers of the accepted loop (0: none).
-  int place_checks = 0;         // Verifications of HeldBy.
   bool rejected_by_gate = false;  // A candidate passed PnP but its pose failed the gate.
   double ms = 0.0;              // Wall time of Detect().
 };
