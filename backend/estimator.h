@@ -44,6 +44,8 @@ struct EstimatorOutput {
   // the next frame (frontend/local_map_search.h); empty when the estimator offers none.
   std::vector<std::pair<LandmarkId, Eigen::Vector3d>> local_map;
   int landmarks_in_state = 0;  // Landmarks currently estimated (window / filter state).
+  // Keyframes the estimator's map holds now (the BA: made minus culled); -1: it keeps none.
+  int keyframes_in_map = -1;
   bool loop_closed = false;    // A loop closure corrected the trajectory at this frame.
 };
 

@@ -5,10 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <sstream>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <sstream>
 
 #include "core/cv_pose.h"
 
@@ -119,8 +118,8 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
   const auto cell_of = [&](const Eigen::Vector2d& uv) {
     const int cx = std::clamp(static_cast<int>(uv.x() * options_.grid_cols / rig_.left.width), 0,
                               options_.grid_cols - 1);
-    const int cy = std::clamp(static_cast<int>(uv.y() * options_.grid_rows / rig_.left.height),
-                              0, options_.grid_rows - 1);
+    const int cy = std::clamp(static_cast<int>(uv.y() * options_.grid_rows / rig_.left.height), 0,
+                              options_.grid_rows - 1);
     return cy * options_.grid_cols + cx;
   };
   const bool stereo = rig_.is_stereo();
@@ -193,9 +192,9 @@ std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& 
       2 * options_.pose_only.min_inliers);
 }
 
-std::optional<Pose> SlidingWindowEstimator::PnpPose(
-    const FrameMeasurement& m, const std::function<bool(LandmarkId)>& use,
-    int min_inliers) const {
+std::optional<Pose> SlidingWindowEstimator::PnpPose(const FrameMeasurement& m,
+                                                    const std::function<bool(LandmarkId)>& use,
+                                                    int min_inliers) const {
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
   std::vector<BaObservation> observations;
@@ -214,9 +213,9 @@ std::optional<Pose> SlidingWindowEstimator::PnpPose(
   std::vector<int> inliers;
   cv::theRNG().state = options_.recovery_seed;
   // Threshold: the chi-square 95 % bound of a 1-pixel observation (2 dof), as the BA's test.
-  const bool found = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200,
-                                        std::sqrt(kChi2Quantile95Dof2), 0.999, inliers,
-                                        cv::SOLVEPNP_EPNP);
+  const bool found =
+      cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200,
+                         std::sqrt(kChi2Quantile95Dof2), 0.999, inliers, cv::SOLVEPNP_EPNP);
   if (!found || static_cast<int>(inliers.size()) < min_inliers) {
     VLOG(1) << "frame " << m.frame << ": PnP failed (" << inliers.size() << " inliers of "
             << object.size() << ")";
@@ -227,9 +226,8 @@ std::optional<Pose> SlidingWindowEstimator::PnpPose(
   const PoseOnlyResult r = EstimatePoseOnly(
       IntrinsicsOf(rig_, ba_.disparity_offset_px()), observations,
       [&](LandmarkId id) { return ba_.LandmarkPosition(id); }, guess, options_.pose_only);
-  VLOG(1) << "frame " << m.frame << ": PnP " << inliers.size() << " inliers of "
-          << object.size() << ", pose-only " << PoseOnlyStatusName(r.status) << " ("
-          << r.num_inliers << " inliers)";
+  VLOG(1) << "frame " << m.frame << ": PnP " << inliers.size() << " inliers of " << object.size()
+          << ", pose-only " << PoseOnlyStatusName(r.status) << " (" << r.num_inliers << " inliers)";
   if (r.status != PoseOnlyStatus::kOk || r.num_inliers < min_inliers) return std::nullopt;
   return r.T_w_c;
 }
@@ -319,8 +317,8 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
   note << (reinitialised ? "re-initialised (a new map placed at the extrapolated pose with the "
                            "last speed: scale and heading across the gap are guesses) "
                          : "initialised ")
-       << "from frame " << init->reference.frame << " (" << init->p_ref.size()
-       << " points, " << TwoViewModelName(init->two_view.model) << ", median parallax "
+       << "from frame " << init->reference.frame << " (" << init->p_ref.size() << " points, "
+       << TwoViewModelName(init->two_view.model) << ", median parallax "
        << init->two_view.median_parallax_deg << " deg)";
   out.note = note.str();
   VLOG(1) << "frame " << m.frame << ": " << out.note;
@@ -422,7 +420,7 @@ void SlidingWindowEstimator::AddToWindow(const BaKeyframe& kf, const FrameMeasur
   }
   // The window's gauge (SlidingWindowBa: num_fixed_keyframes, -1 => 1 stereo, 2 mono).
   const int num_fixed = options_.ba.num_fixed_keyframes >= 0 ? options_.ba.num_fixed_keyframes
-                                                              : (rig_.is_stereo() ? 1 : 2);
+                                                             : (rig_.is_stereo() ? 1 : 2);
   // Refine's gauge: a stereo window's first keyframe held; a mono one's first keyframe held and
   // its distance to the second (the unit), the rest of the second pose free (7 dof).
   const bool stereo = rig_.is_stereo();
@@ -454,6 +452,78 @@ std::optional<Pose> SlidingWindowEstimator::ResumeOldMap(const FrameMeasurement&
   return T_w_c;
 }
 
+void SlidingWindowEstimator::CullHeldKeyframes() {
+  if (held_by_.empty()) return;
+  std::set<KeyframeId> in_use;  // The window's keyframes and those it holds constant.
+  for (const KeyframeId k : ba_.WindowKeyframes()) in_use.insert(k);
+  for (const KeyframeId k : ba_.HeldKeyframes()) in_use.insert(k);
+  for (auto it = held_by_.begin(); it != held_by_.end();) {
+    const auto [culled, holder] = *it;
+    if (in_use.count(culled)) {
+      ++it;
+      continue;
+    }
+    // Never a gauge keyframe (Refine holds it; a mono map's unit pair fixes its scale), never a
+    // holder gone (holders store a place entry, so they are never culled themselves).
+    bool keep = gauge_keyframes_.count(culled) > 0 || !keyframe_poses_.count(holder) ||
+                !keyframe_poses_.count(culled);
+    for (const auto& [a, b] : unit_pairs_) keep = keep || a == culled || b == culled;
+    if (!keep) CullKeyframe(culled, holder);
+    it = held_by_.erase(it);
+  }
+}
+
+void SlidingWindowEstimator::CullKeyframe(KeyframeId culled, KeyframeId holder) {
+  const Pose T_holder_culled = keyframe_poses_.at(holder).inverse() * keyframe_poses_.at(culled);
+  // Its frames: from its own to the first of a later keyframe (frames are in time order and
+  // refer to the keyframe before them, or to a holder, which is older).
+  const auto first = first_frame_of_keyframe_.find(culled);
+  for (size_t i = first == first_frame_of_keyframe_.end() ? 0 : first->second; i < frames_.size();
+       ++i) {
+    FrameRecord& f = frames_[i];
+    if (f.reference == culled) {
+      f.reference = holder;
+      f.T_kf_c = T_holder_culled * f.T_kf_c;
+    } else if (f.reference.valid() && culled < f.reference) {
+      break;
+    }
+  }
+  if (first != first_frame_of_keyframe_.end()) first_frame_of_keyframe_.erase(first);
+  MergeIntoHolder(culled, holder);  // Before its pose goes.
+  keyframe_poses_.erase(culled);
+  for (auto it = keyframe_of_frame_.begin(); it != keyframe_of_frame_.end(); ++it) {
+    if (it->second == culled) {
+      keyframe_of_frame_.erase(it);
+      break;
+    }
+  }
+  observation_archive_.erase(
+      std::remove_if(observation_archive_.begin(), observation_archive_.end(),
+                     [&](const auto& o) { return o.first == culled; }),
+      observation_archive_.end());
+  // Its landmarks: those the window still uses move with the holder from now on, the others
+  // are forgotten.
+  const std::map<LandmarkId, Eigen::Vector3d> window = ba_.Landmarks();
+  std::vector<LandmarkId> forgotten;
+  for (auto it = anchor_.begin(); it != anchor_.end();) {
+    if (it->second != culled) {
+      ++it;
+    } else if (window.count(it->first)) {
+      it->second = holder;
+      ++it;
+    } else {
+      forgotten.push_back(it->first);
+      map_points_.erase(it->first);
+      landmark_observations_.erase(it->first);
+      unconfirmed_loop_landmarks_.erase(it->first);
+      it = anchor_.erase(it);
+    }
+  }
+  ba_.ForgetLandmarks(forgotten);
+  VLOG(2) << "keyframe " << culled << " culled (its place is held by keyframe " << holder << "), "
+          << forgotten.size() << " landmarks forgotten";
+}
+
 bool SlidingWindowEstimator::OutsideWindow(const FrameMeasurement& m) const {
   // The window's landmarks seen by m against the older ones (positions outside the window).
   const std::map<LandmarkId, Eigen::Vector3d> window = ba_.Landmarks();
@@ -461,8 +531,7 @@ bool SlidingWindowEstimator::OutsideWindow(const FrameMeasurement& m) const {
   for (const FeatureObservation& o : m.observations) {
     if (window.count(o.landmark)) {
       ++inside;
-    } else if (ba_.LandmarkPosition(o.landmark) &&
-               !unconfirmed_loop_landmarks_.count(o.landmark)) {
+    } else if (ba_.LandmarkPosition(o.landmark) && !unconfirmed_loop_landmarks_.count(o.landmark)) {
       ++outside;
     }
   }
@@ -476,6 +545,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     T_w_prev_ = keyframe_poses_.at(*solved_in_background_);
     solved_in_background_.reset();
   }
+  CullHeldKeyframes();
   // Lost for long (mono): a frame that relocalises in the old map resumes it; else the new
   // map's initialisation goes on.
   std::optional<Pose> resumed;
@@ -513,8 +583,8 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     // Pose-only tracking against the window (a keyframe: before it joins the window); a frame
     // that resumed the old map has its pose already.
     const std::vector<BaObservation> mapped = WindowObservations(m);
-    const PoseOnlyResult r = resumed ? PoseOnlyResult()
-                                     : ba_.TrackFrame(mapped, T_w_c, options_.pose_only);
+    const PoseOnlyResult r =
+        resumed ? PoseOnlyResult() : ba_.TrackFrame(mapped, T_w_c, options_.pose_only);
     VLOG(r.status == PoseOnlyStatus::kOk ? 2 : 1)
         << "frame " << m.frame << ": pose-only " << PoseOnlyStatusName(r.status) << ", "
         << r.num_inliers << " inliers of " << mapped.size() << " observations of mapped landmarks";
@@ -561,8 +631,13 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     kf.observations = SelectKeyframeObservations(m, T_w_c);
     AddToWindow(kf, m);
     keyframe_poses_[kf.id] = T_w_c;
+    first_frame_of_keyframe_[kf.id] = frames_.size();
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});
     keyframe_of_frame_[m.frame] = kf.id;
+    if (options_.cull_held_keyframes && m.place_held_by) {
+      const auto holder = keyframe_of_frame_.find(*m.place_held_by);
+      if (holder != keyframe_of_frame_.end()) held_by_[kf.id] = holder->second;
+    }
     if (!stereo) RememberLastKeyframe(kf.id, m);
     ReportLandmarks(&out);
     if (options_.background_solve) {
@@ -583,6 +658,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   }
   T_w_prev_ = T_w_c;
   out.T_w_c = T_w_c;
+  out.keyframes_in_map = num_keyframes_in_map();
   if (!stereo) NoteMonoTracking(m, out.valid, T_w_c, &out);
   // A lost stereo frame has no pose either: it would be an extrapolation (a lost keyframe still
   // joins the window at that guess, to carry the stereo landmarks it starts).

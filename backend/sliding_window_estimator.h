@@ -69,6 +69,21 @@
 // (stored relative to it), and in mono their translation is scaled by the keyframe's change of
 // local unit (the refined over the old distance to the next keyframe, or the previous one for
 // the last), as after a Sim(3) loop closure.
+//
+// Culling (options.cull_held_keyframes, default on): a keyframe whose place an older keyframe
+// already holds (the frontend verified the old keyframe's view in it: matcher, PnP and at least
+// loop.place_min_inlier_fraction of the old view's points as inliers; FrameMeasurement::
+// place_held_by) is redundant with that holder for the map. It still does its work in the
+// window: it carries tracks, constrains the window solve, and can close a loop. Once it has left
+// the window (and the held keyframes), it is removed: its frames are stored relative to the
+// holder, T_holder_c = T_w_holder^-1 T_w_culled T_culled_c (so they follow later corrections of
+// the holder, which is physically next to them), the landmarks it anchored move with the holder
+// too, those no longer in the window are forgotten (the holder's landmarks describe the place),
+// and the loop edges that ended at it leave the pose graph (its consecutive edges become one edge
+// between its surviving neighbours, built from the current estimates as every consecutive edge
+// is). A revisit then adds no keyframe to the map once its keyframes leave the window: the count
+// is bounded by the places, not by the time spent in them. The gauge keyframes of Refine and of
+// each mono map are never culled.
 
 #include <functional>
 #include <map>
@@ -140,8 +155,11 @@ struct SlidingWindowEstimatorOptions {
   double max_landmark_depth_m = 60.0;
   BaLoopClosureOptions loop;
   bool background_solve = true;  // see the class comment.
+  // Keyframe culling (see the class comment, "Culling"): a keyframe whose place an older
+  // keyframe holds (FrameMeasurement::place_held_by) is removed once it has left the window.
+  bool cull_held_keyframes = true;
   MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
-  uint64_t recovery_seed = 42;        // Of the mono PnP recovery's RANSAC.
+  uint64_t recovery_seed = 42;       // Of the mono PnP recovery's RANSAC.
   // One camera: after this many lost frames in a row (PnP recovery failing too: the map is out
   // of view), a new map is initialised and placed where the old one would continue.
   int mono_reinit_after_lost_frames = 10;
@@ -182,9 +200,9 @@ class SlidingWindowEstimator : public Estimator {
     return ba_;
   }
   int num_keyframes() const { return num_keyframes_; }
-  int num_loops_closed() const {
-    return static_cast<int>(loop_edges_.size() + mono_loop_edges_.size());
-  }
+  // Keyframes in the map now: those made, minus those culled.
+  int num_keyframes_in_map() const { return static_cast<int>(keyframe_poses_.size()); }
+  int num_loops_closed() const { return loops_closed_; }
 
  private:
   struct FrameRecord {
@@ -211,8 +229,8 @@ class SlidingWindowEstimator : public Estimator {
   std::optional<Pose> RecoverPose(const FrameMeasurement& m) const;
   // RANSAC PnP (OpenCV EPnP, seeded) on m's observations of the landmarks `use` accepts that
   // have a position, then pose-only over them; nullopt with fewer than min_inliers inliers.
-  std::optional<Pose> PnpPose(const FrameMeasurement& m,
-                              const std::function<bool(LandmarkId)>& use, int min_inliers) const;
+  std::optional<Pose> PnpPose(const FrameMeasurement& m, const std::function<bool(LandmarkId)>& use,
+                              int min_inliers) const;
   // Mono: keyframe `id` (frame m) is the last one; its observations are the candidates for new
   // landmarks at the next keyframe.
   void RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m);
@@ -247,6 +265,20 @@ class SlidingWindowEstimator : public Estimator {
   // Optimises the window with the new keyframe `id` and records the new estimates
   // (keyframe_poses_, map_points_). Runs on solver_ when options_.background_solve.
   void SolveWindow(KeyframeId id);
+  // Culls every keyframe of held_by_ that has left the window (and its held keyframes); see
+  // the class comment, "Culling".
+  void CullHeldKeyframes();
+  void CullKeyframe(KeyframeId culled, KeyframeId holder);
+  // The pose graph's part of a cull (sliding_window_loop_closure.cc): the culled keyframe's
+  // edges move to its holder (see the class comment, "Culling").
+  void MergeIntoHolder(KeyframeId culled, KeyframeId holder);
+  // The node before keyframe k in the made order: k - 1, or the holder it was merged into.
+  KeyframeId GraphPredecessor(KeyframeId k) const;
+  // The consecutive edges (from, to) of a pose graph over `nodes`: each node from its
+  // GraphPredecessor (the previous node when that one is not a node).
+  template <typename Node>
+  std::vector<std::pair<KeyframeId, KeyframeId>> ConsecutiveEdges(
+      const std::map<KeyframeId, Node>& nodes) const;
   // Blocks until a background window solve has finished (no-op when none is running).
   void WaitForWindowSolve() const { solver_.Wait(); }
 
@@ -257,9 +289,16 @@ class SlidingWindowEstimator : public Estimator {
   std::map<KeyframeId, Pose> keyframe_poses_;  // Last estimate of every keyframe.
   std::map<LandmarkId, int> landmark_observations_;
   std::map<LandmarkId, Eigen::Vector3d> map_points_;  // Last estimate of every landmark.
-  std::map<LandmarkId, KeyframeId> anchor_;            // The keyframe that added the landmark.
+  std::map<LandmarkId, KeyframeId> anchor_;           // The keyframe that added the landmark.
   std::map<FrameId, KeyframeId> keyframe_of_frame_;
-  std::vector<PoseGraphEdge> loop_edges_;              // Every loop closed so far.
+  std::map<KeyframeId, size_t> first_frame_of_keyframe_;  // Its index in frames_.
+  // Keyframes to cull once they leave the window, and the keyframe holding each one's place.
+  std::map<KeyframeId, KeyframeId> held_by_;
+  // The measured edges of the pose graph: every loop closed so far, and the edges culled
+  // keyframes left to their holders (see the class comment, "Culling").
+  std::vector<PoseGraphEdge> loop_edges_;
+  int loops_closed_ = 0;
+  std::map<KeyframeId, KeyframeId> merged_into_;  // Culled keyframe -> its holder.
   // For Refine (kept only when options_.final_ba is not "off"): every observation given to the
   // window, or every track of each keyframe (final_ba_all_tracks), as (keyframe, observation);
   // and the keyframes each window held as its gauge (the first one or two after each restart).
@@ -267,7 +306,7 @@ class SlidingWindowEstimator : public Estimator {
   std::set<KeyframeId> gauge_keyframes_;
   std::vector<std::pair<KeyframeId, KeyframeId>> unit_pairs_;  // Mono: (first, second) per map.
   int added_since_window_start_ = 0;
-  std::vector<Sim3Edge> mono_loop_edges_;  // One camera: every loop, in the current units.
+  std::vector<Sim3Edge> mono_loop_edges_;  // One camera: the same, in the current units.
   // One camera: old landmarks a loop that was not closed relabelled (see Add).
   std::set<LandmarkId> unconfirmed_loop_landmarks_;
   Pose T_w_prev_ = Pose::Identity();

@@ -43,8 +43,7 @@ struct LoopClosureInformation {
 
 }  // namespace
 
-bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur_id,
-                                       Pose* T_w_c) {
+bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c) {
   const auto old = keyframe_of_frame_.find(loop.old_frame);
   if (old == keyframe_of_frame_.end()) {
     LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
@@ -56,12 +55,11 @@ bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur
   T_w_kf[cur_id] = *T_w_c;
   const LoopClosureInformation info = {options_.loop};
   std::vector<PoseGraphEdge> edges;
-  for (auto it = T_w_kf.begin(); std::next(it) != T_w_kf.end(); ++it) {
-    const auto next = std::next(it);
+  for (const auto& [from, to] : ConsecutiveEdges(T_w_kf)) {
     PoseGraphEdge e;
-    e.from = it->first;
-    e.to = next->first;
-    e.T_from_to = it->second.inverse() * next->second;
+    e.from = from;
+    e.to = to;
+    e.T_from_to = T_w_kf.at(from).inverse() * T_w_kf.at(to);
     e.information = info.Odometry(e.T_from_to);
     edges.push_back(e);
   }
@@ -81,6 +79,7 @@ bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur
     return false;
   }
   loop_edges_.push_back(loop_edge);
+  ++loops_closed_;
   VLOG(1) << "loop closed: keyframe " << loop_edge.from << " (frame " << loop.old_frame
           << ") -> new keyframe " << cur_id << ", " << loop.inliers << " inliers, pose graph cost "
           << summary.initial_cost << " -> " << summary.final_cost << ", current moved by "
@@ -123,16 +122,14 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   // scale from the similarity (else left to the graph); the similarity alone without a PnP.
   std::set<LandmarkId> old_ids;
   for (const auto& ids : loop.relabelled) old_ids.insert(ids.second);
-  const std::optional<Pose> T_w_cur_old =
-      PnpPose(m, [&](LandmarkId id) { return old_ids.count(id) > 0; },
-              options_.loop.mono_pnp_min_inliers);
+  const std::optional<Pose> T_w_cur_old = PnpPose(
+      m, [&](LandmarkId id) { return old_ids.count(id) > 0; }, options_.loop.mono_pnp_min_inliers);
   if (!sim3 && !T_w_cur_old) {
     VLOG(1) << "loop to frame " << loop.old_frame << ": no Sim(3) from " << p_cur.size()
             << " landmarks mapped on both sides, no PnP on the old ones: ignored";
     return false;
   }
-  Sim3 S_w_cur_in_old =
-      sim3 ? sim3->S_old_cur * Sim3{*T_w_c, 1.0} : Sim3{*T_w_cur_old, 1.0};
+  Sim3 S_w_cur_in_old = sim3 ? sim3->S_old_cur * Sim3{*T_w_c, 1.0} : Sim3{*T_w_cur_old, 1.0};
   if (T_w_cur_old) S_w_cur_in_old.T = *T_w_cur_old;
   const double loop_scale_sigma =
       sim3 ? options_.loop.mono_loop_scale_sigma : options_.loop.mono_pnp_scale_sigma;
@@ -142,14 +139,12 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   S_w_kf[cur_id] = Sim3{*T_w_c, 1.0};
   const LoopClosureInformation info = {options_.loop};
   std::vector<Sim3Edge> edges;
-  for (auto it = S_w_kf.begin(); std::next(it) != S_w_kf.end(); ++it) {
-    const auto next = std::next(it);
+  for (const auto& [from, to] : ConsecutiveEdges(S_w_kf)) {
     Sim3Edge e;
-    e.from = it->first;
-    e.to = next->first;
-    e.S_from_to = it->second.Inverse() * next->second;
-    e.information =
-        info.WithScale(info.Odometry(e.S_from_to.T), options_.loop.mono_scale_sigma);
+    e.from = from;
+    e.to = to;
+    e.S_from_to = S_w_kf.at(from).Inverse() * S_w_kf.at(to);
+    e.information = info.WithScale(info.Odometry(e.S_from_to.T), options_.loop.mono_scale_sigma);
     edges.push_back(e);
   }
   // The loop: the current keyframe moved into the old neighbourhood by the similarity.
@@ -165,8 +160,7 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   const std::map<KeyframeId, Sim3> corrected =
       OptimizeSim3PoseGraph(S_w_kf, edges, options_.loop.pose_graph, &summary);
   if (!summary.usable) {
-    LOG(WARNING) << "loop Sim(3) pose graph failed: loop to frame " << loop.old_frame
-                 << " ignored";
+    LOG(WARNING) << "loop Sim(3) pose graph failed: loop to frame " << loop.old_frame << " ignored";
     return false;
   }
   VLOG(1) << "mono loop closed: keyframe " << loop_edge.from << " (frame " << loop.old_frame
@@ -180,6 +174,7 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   // (p_k' = s_k p_k), so a stored loop edge a -> b is re-expressed as
   //   S_a_b' = (R, s_a t, s s_a / s_b).
   mono_loop_edges_.push_back(loop_edge);
+  ++loops_closed_;
   for (Sim3Edge& e : mono_loop_edges_) {
     const double s_a = corrected.at(e.from).scale, s_b = corrected.at(e.to).scale;
     e.S_from_to.T.translation() *= s_a;
@@ -206,6 +201,69 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   }
   *T_w_c = T_w_kf.at(cur_id);
   return true;
+}
+
+void SlidingWindowEstimator::MergeIntoHolder(KeyframeId culled, KeyframeId holder) {
+  const Pose T_holder_culled = keyframe_poses_.at(holder).inverse() * keyframe_poses_.at(culled);
+  const Sim3 S_holder_culled{T_holder_culled, 1.0};
+  // Its edges: from the keyframe before it (made order; culled ones stand for their holder),
+  // kept as a measured edge to the holder unless the two are the same node or neighbours in
+  // the made order (their consecutive edge says it already).
+  const KeyframeId before = GraphPredecessor(culled);
+  const bool adjacent = before.value + 1 == holder.value || holder.value + 1 == before.value;
+  if (before.valid() && before != holder && !adjacent && keyframe_poses_.count(before)) {
+    const LoopClosureInformation info{options_.loop};
+    const Pose T_before_holder = keyframe_poses_.at(before).inverse() * keyframe_poses_.at(holder);
+    if (rig_.is_stereo()) {
+      loop_edges_.push_back(
+          {before, holder, T_before_holder, info.Odometry(T_before_holder), /*is_loop=*/false});
+    } else {
+      mono_loop_edges_.push_back(
+          {before, holder, Sim3{T_before_holder, 1.0},
+           info.WithScale(info.Odometry(T_before_holder), options_.loop.mono_scale_sigma),
+           /*is_loop=*/false});
+    }
+  }
+  // Loops (and edges of earlier culls) that ended at it end at the holder now.
+  for (PoseGraphEdge& e : loop_edges_) {
+    if (e.from == culled)
+      e = {holder, e.to, T_holder_culled * e.T_from_to, e.information, e.is_loop};
+    if (e.to == culled)
+      e = {e.from, holder, e.T_from_to * T_holder_culled.inverse(), e.information, e.is_loop};
+  }
+  for (Sim3Edge& e : mono_loop_edges_) {
+    if (e.from == culled)
+      e = {holder, e.to, S_holder_culled * e.S_from_to, e.information, e.is_loop};
+    if (e.to == culled)
+      e = {e.from, holder, e.S_from_to * S_holder_culled.Inverse(), e.information, e.is_loop};
+  }
+  const auto self = [](const auto& e) { return e.from == e.to; };
+  loop_edges_.erase(std::remove_if(loop_edges_.begin(), loop_edges_.end(), self),
+                    loop_edges_.end());
+  mono_loop_edges_.erase(std::remove_if(mono_loop_edges_.begin(), mono_loop_edges_.end(), self),
+                         mono_loop_edges_.end());
+  merged_into_[culled] = holder;
+}
+
+KeyframeId SlidingWindowEstimator::GraphPredecessor(KeyframeId k) const {
+  const KeyframeId before(k.value - 1);
+  const auto merged = merged_into_.find(before);
+  return merged == merged_into_.end() ? before : merged->second;
+}
+
+template <typename Node>
+std::vector<std::pair<KeyframeId, KeyframeId>> SlidingWindowEstimator::ConsecutiveEdges(
+    const std::map<KeyframeId, Node>& nodes) const {
+  std::vector<std::pair<KeyframeId, KeyframeId>> out;
+  for (auto it = nodes.begin(); it != nodes.end(); ++it) {
+    if (it == nodes.begin()) continue;
+    // The keyframe made before it, or the holder it was merged into (see the class comment,
+    // "Culling"); the previous node when that one is unknown (never made: a new map's first).
+    KeyframeId from = GraphPredecessor(it->first);
+    if (!nodes.count(from)) from = std::prev(it)->first;
+    if (from != it->first) out.emplace_back(from, it->first);
+  }
+  return out;
 }
 
 }  // namespace dala

@@ -102,6 +102,7 @@ TrackResult System::Track(const Frame& frame) {
   s.note = e.note;
   s.keyframe = m.is_keyframe;
   s.places = static_cast<int>(places());
+  s.keyframes_in_map = e.keyframes_in_map;
   s.features = static_cast<int>(m.observations.size());
   for (const FeatureObservation& o : m.observations) s.tracked += o.track_length > 1;
   s.landmarks = e.landmarks_in_state;
@@ -114,7 +115,7 @@ TrackResult System::Track(const Frame& frame) {
   // A mono keyframe the estimator could not place is no keyframe of the map (it has a guessed
   // pose); a stereo one always joins the window.
   // A keyframe whose place an older keyframe holds (one entry per place) is not saved twice.
-  if (m.is_keyframe && (e.valid || rig_.is_stereo()) && !frontend_->keyframe_place_held_by()) {
+  if (m.is_keyframe && (e.valid || rig_.is_stereo()) && !m.place_held_by) {
     RecordKeyframe(frame.left);
   }
 

@@ -48,6 +48,9 @@ struct FrameStats {
   bool skipped = false;  // Its images could not be read (SkipFrame): lost, no pose.
   bool keyframe = false;
   int places = 0;  // Place-recognition entries after this frame (System::places()).
+  // Keyframes in the estimator's map after this frame (EstimatorOutput::keyframes_in_map: made
+  // minus culled; -1 for an estimator that keeps none).
+  int keyframes_in_map = -1;
   int features = 0;
   int tracked = 0;           // Observations continuing a track.
   int landmarks = 0;         // In the estimator's state.

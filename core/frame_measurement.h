@@ -92,6 +92,10 @@ struct FrameMeasurement {
   bool is_keyframe = false;
   // Set on a keyframe where a loop was recognised (see LoopDetection).
   std::optional<LoopDetection> loop;
+  // Set on a keyframe whose place an older keyframe's place-recognition entry already holds
+  // (PlaceRecognitionOptions::one_entry_per_place): that keyframe's frame. The keyframe stores no
+  // entry; an estimator may cull it once it has done its part (SlidingWindowEstimator).
+  std::optional<FrameId> place_held_by;
   // Frames since the last keyframe and this frame's tracked fraction of that keyframe's points.
   double tracked_fraction = 1.0;
   FrontendTimings timings;

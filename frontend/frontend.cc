@@ -545,6 +545,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     out.loop = DetectLoop(frame, motion, &cur);
     out.timings.loop_ms = MsSince(t0);
   }
+  if (out.is_keyframe) out.place_held_by = keyframe_place_held_by_;
 
   // 6. The measurement.
   out.observations.reserve(n);

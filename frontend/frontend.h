@@ -116,10 +116,6 @@ class Frontend {
   const std::vector<LandmarkId>* keyframe_landmarks() const {
     return keyframe_ ? &keyframe_->landmark : nullptr;
   }
-  // The current keyframe's place was already held by an older keyframe's database entry
-  // (PlaceRecognitionOptions::one_entry_per_place): that keyframe's frame. Its own entry was not
-  // stored, and a saved map leaves it out too (System::RecordKeyframe).
-  std::optional<FrameId> keyframe_place_held_by() const { return keyframe_place_held_by_; }
 
  private:
   // What is kept of a processed frame for the next ones.
@@ -164,7 +160,9 @@ class Frontend {
   WorkerThread detection_worker_;  // Detects the right image (persistent: keeps its scratch).
   std::optional<TrackedFrame> prev_;
   std::optional<TrackedFrame> keyframe_;
-  std::optional<FrameId> keyframe_place_held_by_;  // keyframe_place_held_by().
+  // The current keyframe's place was already held by an older keyframe's database entry
+  // (FrameMeasurement::place_held_by).
+  std::optional<FrameId> keyframe_place_held_by_;
   std::optional<TrackedFrame> tracked_keyframe_;  // The last keyframe the estimator tracked.
   Pose velocity_T_prev_cur_ = Pose::Identity();
   double mono_step_length_ = 1.0;  // One camera: the last non-zero dead-reckoned step (no unit).

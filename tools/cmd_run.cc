@@ -105,6 +105,7 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"skipped", s.skipped},
           {"keyframe", s.keyframe},
           {"places", s.places},
+          {"keyframes_in_map", s.keyframes_in_map},
           {"features", s.features},
           {"tracked", s.tracked},
           {"landmarks", s.landmarks},
@@ -267,6 +268,7 @@ int RunRun(const std::vector<std::string>& args) {
   // images: no pose); initialising: frames a mono estimator saw before its map existed. The
   // trajectory leaves out the frames without a pose.
   int failures = 0, skipped = 0, initialising = 0, keyframes = 0, loops = 0, loops_closed = 0;
+  int keyframes_in_map = -1;  // The estimator's map after the last frame (-1: it keeps none).
   std::vector<double> loop_ms;  // Place recognition, per keyframe.
   for (const FrameStats& s : stats) {
     if (!s.skipped) total_ms.push_back(s.total_ms);
@@ -277,6 +279,7 @@ int RunRun(const std::vector<std::string>& args) {
     failures += !s.valid && s.status != TrackingStatus::kInitializing;
     skipped += s.skipped;
     keyframes += s.keyframe;
+    if (s.keyframes_in_map >= 0) keyframes_in_map = s.keyframes_in_map;
   }
   nlohmann::json summary = {
       {"frames", stats.size()},
@@ -295,6 +298,8 @@ int RunRun(const std::vector<std::string>& args) {
       // "scale" is the evaluation's Sim(3) scale (below): what fixes the map's unit is this.
       {"scale_source", system.ScaleDescription()},
       {"keyframes", keyframes},
+      // Keyframes left in the estimator's map (made minus culled; -1: the estimator keeps none).
+      {"keyframes_in_map", keyframes_in_map},
       // Keyframes with an entry in the place recognition (one per place on revisits).
       {"places", system.places()},
       {"loops_detected", loops},
@@ -359,17 +364,25 @@ int RunRun(const std::vector<std::string>& args) {
   const double peak_rss_mb = PeakResidentMemoryMb();
   summary["peak_rss_mb"] = peak_rss_mb;
   {
-    bench::ChartSeries keyframe_curve{"keyframes", {}, {}};
+    bench::ChartSeries keyframe_curve{"keyframes made", {}, {}};
+    // Culling (docs/backend.md): what the map keeps of them.
+    bench::ChartSeries map_curve{"keyframes in the map", {}, {}};
     // One entry per place (docs/backend.md): what the memory follows on revisits.
     bench::ChartSeries place_curve{"places stored", {}, {}};
     bench::ChartSeries rss_curve{"resident memory", {}, {}};
     int keyframes_so_far = 0;
     int places_so_far = 0;
+    int in_map_so_far = 0;
     for (size_t i = 0; i < stats.size(); ++i) {
       keyframes_so_far += stats[i].keyframe;
       if (!stats[i].skipped) places_so_far = stats[i].places;
+      if (!stats[i].skipped) in_map_so_far = stats[i].keyframes_in_map;
       keyframe_curve.x.push_back(static_cast<double>(i));
       keyframe_curve.y.push_back(keyframes_so_far);
+      if (in_map_so_far >= 0) {
+        map_curve.x.push_back(static_cast<double>(i));
+        map_curve.y.push_back(in_map_so_far);
+      }
       place_curve.x.push_back(static_cast<double>(i));
       place_curve.y.push_back(places_so_far);
       if (i < rss_mb.size()) {
@@ -378,14 +391,15 @@ int RunRun(const std::vector<std::string>& args) {
       }
     }
     bench::LineChartOptions top, bottom;
-    top.title = "keyframes and stored places so far";
+    top.title = "keyframes made, kept in the map, and stored places";
     top.x_label = "frame";
     top.y_label = "count";
     bottom.title = "resident memory of the process";
     bottom.x_label = "frame";
     bottom.y_label = "MiB";
-    bench::DrawStackedLineCharts({{{keyframe_curve, place_curve}, top}, {{rss_curve}, bottom}},
-                                 dir + "/memory.png");
+    std::vector<bench::ChartSeries> counts = {keyframe_curve, place_curve};
+    if (!map_curve.x.empty()) counts.insert(counts.begin() + 1, map_curve);
+    bench::DrawStackedLineCharts({{counts, top}, {{rss_curve}, bottom}}, dir + "/memory.png");
   }
   const nlohmann::json report = {
       {"dataset",
@@ -414,8 +428,10 @@ int RunRun(const std::vector<std::string>& args) {
               << "\n";
   }
   std::cout << "memory      " << std::fixed << std::setprecision(0) << peak_rss_mb
-            << " MiB peak resident, " << keyframes << " keyframes, " << system.places()
-            << " places stored (memory.png)\n";
+            << " MiB peak resident, " << keyframes << " keyframes made"
+            << (keyframes_in_map >= 0 ? ", " + std::to_string(keyframes_in_map) + " in the map"
+                                      : std::string())
+            << ", " << system.places() << " places stored (memory.png)\n";
   std::cout << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
             << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {

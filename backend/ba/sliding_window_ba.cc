@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <set>
 #include <sstream>
 
 #include "backend/ba/reprojection_factors.h"
@@ -98,6 +99,19 @@ void SlidingWindowBa::AddKeyframe(const BaKeyframe& kf) {
   ++num_added_;
   window_.push_back(std::move(state));
   InitializeStereoLandmarks(window_.back());
+}
+
+void SlidingWindowBa::ForgetLandmarks(const std::vector<LandmarkId>& ids) {
+  if (ids.empty()) return;
+  std::set<LandmarkId> observed;
+  for (auto* keyframes : {&held_, &window_}) {
+    for (const KeyframeState& kf : *keyframes) {
+      for (const BaObservation& obs : kf.observations) observed.insert(obs.landmark);
+    }
+  }
+  for (const LandmarkId id : ids) {
+    if (!observed.count(id)) landmarks_.erase(id);
+  }
 }
 
 void SlidingWindowBa::AddObservation(KeyframeId id, const BaObservation& obs) {

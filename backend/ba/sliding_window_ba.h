@@ -164,6 +164,9 @@ class SlidingWindowBa {
 
   // Gives (or overrides) the world position of a landmark; it is used as the initial value.
   void SetLandmarkPosition(LandmarkId id, const Eigen::Vector3d& p_w);
+  // Forgets the last known position of each landmark that no keyframe of the window (or held)
+  // observes; the others are kept.
+  void ForgetLandmarks(const std::vector<LandmarkId>& ids);
 
   // Adds a keyframe (kf.T_w_c is the initial guess). When the window is full the oldest keyframe
   // is marginalised (or dropped) first, at the current estimate. CHECKs that ids increase.

@@ -77,6 +77,8 @@ bool ReadReport(const std::string& path, BenchRunResult* r, RunSeries* series) {
   r->fps = NumberAt(report, {"summary", "fps"});
   r->landmarks = IntAt(report, {"summary", "landmarks"});
   r->keyframes = IntAt(report, {"summary", "keyframes"});
+  r->keyframes_in_map = IntAt(report, {"summary", "keyframes_in_map"});
+  if (r->keyframes_in_map && *r->keyframes_in_map < 0) r->keyframes_in_map.reset();
   r->tracking_failures = IntAt(report, {"summary", "tracking_failures"});
   if (!r->tracking_failures && r->frames) r->tracking_failures = lost;
   return true;

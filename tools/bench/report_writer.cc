@@ -62,6 +62,7 @@ const std::vector<Column>& Columns() {
       {"path_length_m", "path [m]", [](const auto& r) { return Fixed(r.path_length_m, 1); }},
       {"landmarks", "landmarks", [](const auto& r) { return Int(r.landmarks); }},
       {"keyframes", "keyframes", [](const auto& r) { return Int(r.keyframes); }},
+      {"keyframes_in_map", "in map", [](const auto& r) { return Int(r.keyframes_in_map); }},
       {"tracking_failures", "lost", [](const auto& r) { return Int(r.tracking_failures); }},
       {"alignment", "align", [](const auto& r) { return r.alignment; }},
       {"error", "error", [](const auto& r) { return r.error; }},

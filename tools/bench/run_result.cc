@@ -36,6 +36,7 @@ void ForEachField(R& r, F&& f) {
   f("wall_s", r.wall_s);
   f("landmarks", r.landmarks);
   f("keyframes", r.keyframes);
+  f("keyframes_in_map", r.keyframes_in_map);
   f("tracking_failures", r.tracking_failures);
   f("frames", r.frames);
   f("alignment", r.alignment);

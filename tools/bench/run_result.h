@@ -40,6 +40,8 @@ struct BenchRunResult {
   std::optional<double> fps;
   std::optional<double> ms_median, ms_p95, ms_max;  // Per-frame "total" time.
   std::optional<int> landmarks, keyframes, tracking_failures;
+  // Keyframes left in the map after culling (absent: the estimator keeps none, the EKFs).
+  std::optional<int> keyframes_in_map;
 
   // Re-evaluated by the harness (core/eval Evaluate), see docs/benchmarking.md.
   std::string alignment;  // "se3" (stereo) | "sim3" (mono).

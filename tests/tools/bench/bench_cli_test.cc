@@ -126,6 +126,7 @@ TEST_F(BenchCli, RecordsMetricsOfEveryRunAndItsFailures) {
       EXPECT_DOUBLE_EQ(run["ms_max"].get<double>(), 19.0);
       EXPECT_EQ(run["landmarks"], 4321);
       EXPECT_EQ(run["keyframes"], 16);
+      EXPECT_EQ(run["keyframes_in_map"], 12);
       EXPECT_EQ(run["tracking_failures"], 1);
       EXPECT_EQ(run["frames"], 80);
       EXPECT_EQ(run["pairs"], 80);
