@@ -89,6 +89,8 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("frontend", "parallel_detection", &f.parallel_detection);
   v->Field("frontend", "local_map_search", &f.local_map.enable);
   v->Field("frontend", "local_map_search_stereo", &f.local_map.stereo);
+  v->Field("frontend", "local_map_search_stereo_when_tracked_below",
+           &f.local_map.stereo_when_tracked_below);
   v->Field("frontend", "local_map_radius_px", &f.local_map.radius_px);
   v->Field("frontend", "local_map_forget_after_frames", &f.local_map.forget_after_frames);
   PlaceRecognitionOptions& l = o->frontend.loop;

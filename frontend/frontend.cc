@@ -466,9 +466,26 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   if (options_.match_keyframe && motion && keyframe_ && keyframe_->id != prev_->id) {
     ReacquireFromKeyframe(&cur);
   }
-  // The guided local-map search: one camera, or stereo when asked (local_map.stereo). The
-  // relocalisation after a lost frame: both.
-  const bool guided = !stereo || options_.local_map.stereo;
+  // The guided local-map search: one camera, or stereo when asked (local_map.stereo) or while
+  // the frame-to-frame tracks break (local_map.stereo_when_tracked_below). The relocalisation
+  // after a lost frame: both.
+  const double auto_below = options_.local_map.stereo_when_tracked_below;
+  if (stereo && motion && auto_below > 0 && n > 0) {
+    const double continued = static_cast<double>(std::count_if(
+        cur.landmark.begin(), cur.landmark.end(), [](const LandmarkId& id) { return id.valid(); }));
+    const double fraction = continued / n;
+    mean_tracked_fraction_ =
+        mean_tracked_fraction_ < 0 ? fraction : 0.8 * mean_tracked_fraction_ + 0.2 * fraction;
+    const bool was_on = stereo_search_on_;
+    stereo_search_on_ = was_on ? mean_tracked_fraction_ <= auto_below + 0.1
+                               : mean_tracked_fraction_ < auto_below;
+    if (was_on != stereo_search_on_) {
+      VLOG(1) << "frame " << frame.id << ": guided local-map search "
+              << (stereo_search_on_ ? "on" : "off") << " (mean tracked fraction "
+              << mean_tracked_fraction_ << ")";
+    }
+  }
+  const bool guided = !stereo || options_.local_map.stereo || stereo_search_on_;
   if (prev_ && guided) {
     std::optional<Pose> T_prev_cur;
     if (motion) T_prev_cur = motion->T_prev_cur;
@@ -562,8 +579,9 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     }
     out.observations.push_back(o);
   }
-  // Appearances are kept only where the System hands over local maps (System::Track).
-  if (!stereo || options_.local_map.stereo) {
+  // Appearances are kept only where the System hands over local maps (System::Track) and the
+  // search may run.
+  if (!stereo || options_.local_map.stereo || auto_below > 0) {
     local_map_search_.Remember(cur.id, cur.detection, cur.landmark, cur.track_length);
   }
   relocalised_prev_ = relocalised_prev_ || relocalised;

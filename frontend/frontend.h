@@ -174,6 +174,11 @@ class Frontend {
   // stereo dead reckoning continues from the estimator's pose instead of the extrapolation of
   // the gap.
   bool relocalised_prev_ = false;
+  // Stereo: the exponential mean of the fraction of points continuing a track, and whether the
+  // guided search is on because of it (LocalMapSearchOptions::stereo_when_tracked_below);
+  // -1 before the first tracked frame.
+  double mean_tracked_fraction_ = -1.0;
+  bool stereo_search_on_ = false;
   // UseMap: no frame tracked in the saved map yet.
   bool awaiting_map_ = false;
 };

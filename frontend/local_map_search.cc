@@ -14,6 +14,9 @@ bool LocalMapSearchOptions::IsValid(std::string* why) const {
   };
   if (!(radius_px > 0)) return fail("frontend.local_map_radius_px must be > 0");
   if (forget_after_frames < 1) return fail("frontend.local_map_forget_after_frames must be >= 1");
+  if (!(stereo_when_tracked_below >= 0 && stereo_when_tracked_below <= 0.9)) {
+    return fail("frontend.local_map_search_stereo_when_tracked_below must be in [0, 0.9]");
+  }
   return true;
 }
 
