@@ -43,7 +43,7 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (max_new_landmarks_per_keyframe < 10)
     return fail("ba.max_new_landmarks_per_keyframe must be >= 10");
   if (grid_cols < 1 || grid_rows < 1) return fail("ba.grid_cols and ba.grid_rows must be >= 1");
-  if (max_landmark_depth_m <= 0) return fail("ba.max_landmark_depth_m must be > 0");
+  if (max_landmark_depth_m < 0) return fail("ba.max_landmark_depth_m must be >= 0 (0: no limit)");
   if (mono_reinit_after_lost_frames < 1)
     return fail("ba.mono_reinit_after_lost_frames must be >= 1");
   if (final_ba != "after_loop" && final_ba != "always" && final_ba != "off") {
@@ -128,7 +128,8 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
     if (landmark_observations_.count(o.landmark)) {
       out.push_back(ToBa(o));
       ++cell_count[cell_of(o.uv)];
-    } else if (stereo ? o.has_stereo() && o.p_c0.z() < options_.max_landmark_depth_m
+    } else if (stereo ? o.has_stereo() && (options_.max_landmark_depth_m == 0 ||
+                                           o.p_c0.z() < options_.max_landmark_depth_m)
                       : last_keyframe_observations_.count(o.landmark) > 0) {
       fresh.push_back(&o);
     }

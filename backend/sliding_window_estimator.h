@@ -152,7 +152,9 @@ struct SlidingWindowEstimatorOptions {
   int grid_cols = 8;  // Cells of the new-landmark selection grid.
   int grid_rows = 5;
   // Landmarks farther than this (camera frame) are not added: weak constraints on translation.
-  double max_landmark_depth_m = 60.0;
+  // 0 (default): no limit. A limit on the measured depth biases the far points kept (see
+  // StereoOptions::max_depth_m); rendered flight 0.1275 -> 0.0921 m without this one alone.
+  double max_landmark_depth_m = 0.0;
   BaLoopClosureOptions loop;
   bool background_solve = true;  // see the class comment.
   // Keyframe culling (see the class comment, "Culling"): a keyframe whose place an older

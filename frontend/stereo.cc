@@ -53,8 +53,8 @@ bool StereoOptions::IsValid(std::string* why) const {
   };
   if (!matcher.IsValid(why)) return false;
   if (max_dv_px <= 0) return fail("stereo.max_dv_px must be > 0");
-  if (min_depth_m <= 0 || max_depth_m <= min_depth_m)
-    return fail("stereo: need 0 < min_depth_m < max_depth_m");
+  if (min_depth_m <= 0 || (max_depth_m != 0 && max_depth_m <= min_depth_m))
+    return fail("stereo: need 0 < min_depth_m < max_depth_m (or max_depth_m 0: no limit)");
   if (!(max_depth_baselines >= 0))
     return fail("stereo.max_depth_baselines must be >= 0 (0: no limit)");
   if (min_points_with_depth < 0) return fail("stereo.min_points_with_depth must be >= 0");
@@ -71,14 +71,14 @@ std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig, const 
                                                     const StereoOptions& options) {
   CHECK(rig.is_stereo()) << "MatchStereo needs a stereo rig";
   const double fb = rig.left.fx * rig.baseline;
-  const double min_disparity = fb / options.max_depth_m;
+  const double min_disparity =
+      options.max_depth_m > 0 ? fb / options.max_depth_m : kMinStereoDisparityPx;
   const double max_disparity = fb / options.min_depth_m;
   // Depth is kept from this disparity up (see the depth limit in stereo.h).
-  const double max_depth_kept =
+  const double min_disparity_kept =
       options.max_depth_baselines > 0
-          ? std::min(options.max_depth_m, options.max_depth_baselines * rig.baseline)
-          : options.max_depth_m;
-  const double min_disparity_kept = fb / max_depth_kept;
+          ? std::max(min_disparity, fb / (options.max_depth_baselines * rig.baseline))
+          : min_disparity;
   const MatchPrior prior =
       MatchPrior::RectifiedStereo(options.max_dv_px, min_disparity, max_disparity);
   MatcherOptions matcher = options.matcher;

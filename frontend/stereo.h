@@ -34,11 +34,21 @@
 
 namespace dala {
 
+// The smallest disparity matched without a depth limit (StereoOptions::max_depth_m = 0): a point
+// whose disparity is within the sub-pixel noise (~0.05 px) of zero has no usable depth anyway.
+constexpr double kMinStereoDisparityPx = 0.02;
+
 struct StereoOptions {
   MatcherOptions matcher = MatcherOptions::ForStereo();
   double max_dv_px = 1.5;     // Rows of a rectified pair agree to this (calibration error).
   double min_depth_m = 0.3;   // Points nearer than this are rejected (disparity upper bound).
-  double max_depth_m = 80.0;  // Stereo search range: disparities down to fx b / max_depth_m.
+  // Stereo search range: disparities down to fx b / max_depth_m; 0 (default): no limit, down to
+  // kMinStereoDisparityPx. A limit on the MEASURED depth keeps the far points whose disparity
+  // noise came out large and drops those whose noise came out small, so the far points kept
+  // are biased near (rendered flight: the BA's disparity offset estimate -0.07 px with the old
+  // 80 m limit and the BA's 60 m, -0.002 px without), and it drops the far points that hold the
+  // rotation (flight ATE 0.1275 -> 0.0289 m without both; docs/results.md).
+  double max_depth_m = 0.0;
   // Depth is kept only for points nearer than this many baselines (and max_depth_m); see the
   // comment above. 0: no limit (the default: an exact rig, as rendered, loses accuracy with
   // the limit: small_loop at 480x320 0.031 -> 0.148 m ATE). Real rigs with calibration
