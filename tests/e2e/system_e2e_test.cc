@@ -119,7 +119,7 @@ TEST(SystemE2e, BackgroundWindowSolveGivesTheSameTrajectory) {
 // (LocalMapSearchOptions::stereo_when_tracked_below): the rendered `fast` preset (11 m/s, heading
 // wobbles) keeps ~43 % of its points from one frame to the next and gets it; the slow rover
 // keeps ~72 % and does not, so its trajectory is bit for bit the one without the option.
-// Measured (150 frames each): fast ATE 0.0206 m with it, 0.0594 m without; bound: at most 0.7x.
+// Measured (150 frames each): fast ATE 0.0232 m with it, 0.0435 m without; bound: at most 0.7x.
 TEST(SystemE2e, GuidedSearchTurnsOnWhereTracksBreak) {
   sim::SimOptions fast;
   fast.preset = "fast";
