@@ -79,11 +79,14 @@
 // holder, T_holder_c = T_w_holder^-1 T_w_culled T_culled_c (so they follow later corrections of
 // the holder, which is physically next to them), the landmarks it anchored move with the holder
 // too, those no longer in the window are forgotten (the holder's landmarks describe the place),
-// and the loop edges that ended at it leave the pose graph (its consecutive edges become one edge
-// between its surviving neighbours, built from the current estimates as every consecutive edge
-// is). A revisit then adds no keyframe to the map once its keyframes leave the window: the count
-// is bounded by the places, not by the time spent in them. The gauge keyframes of Refine and of
-// each mono map are never culled.
+// and in the pose graph it is merged into the holder (MergeIntoHolder): the loop edges that ended
+// at it end at the holder (composed with T_culled_holder), the edge from the keyframe made before
+// it is kept as a measured edge to the holder (from the estimates at the cull), and each
+// keyframe's consecutive edge starts at the keyframe made before it or at that one's holder
+// (ConsecutiveEdges). Dropping its loop edges instead loses the constraint of the loop that held
+// it (docs/backend.md, Culling). A revisit then adds no keyframe to the map once its keyframes
+// leave the window: the count is bounded by the places, not by the time spent in them. The gauge
+// keyframes of Refine and of each mono map are never culled.
 
 #include <functional>
 #include <map>
