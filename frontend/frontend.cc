@@ -320,7 +320,8 @@ void Frontend::RelocalizeFromKeyframe(TrackedFrame* cur) const {
 
 std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
                                                   const std::optional<MotionEstimate>& motion,
-                                                  TrackedFrame* cur) {
+                                                  TrackedFrame* cur,
+                                                  std::optional<FrameId>* held_by) {
   // Stereo: the keyframe's stereo points and the dead-reckoned pose (metres). One camera: its
   // mapped landmarks, at the estimator's predicted pose (map units).
   Pose T_w_c = cur->T_w_c;
@@ -360,11 +361,10 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
       << (stats.rejected_by_gate ? ", a PnP pose outside the gate" : "")
       << (match ? ", loop to frame " + std::to_string(match->loop.old_frame.value) : "");
   // One entry per place: a keyframe whose place an older entry holds adds no entry.
-  keyframe_place_held_by_ =
-      place_recognition_.HeldBy(entry, match, cur->detection, cur->stereo, cur->landmark);
-  if (keyframe_place_held_by_) {
-    VLOG(2) << "frame " << frame.id << ": its place is held by keyframe "
-            << *keyframe_place_held_by_ << "'s entry; not stored again";
+  *held_by = place_recognition_.HeldBy(entry, match, cur->detection, cur->stereo, cur->landmark);
+  if (*held_by) {
+    VLOG(2) << "frame " << frame.id << ": its place is held by keyframe " << **held_by
+            << "'s entry; not stored again";
   } else {
     place_recognition_.Add(std::move(entry));
   }
@@ -555,14 +555,12 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   // 5. Loop detection at keyframes (relabels the recognised points before they are output).
   // Not after a loss: the dead-reckoned pose that gates a loop is an extrapolation then, and a
   // recognised place has already relabelled the points (RelocalizeFromDatabase).
-  if (out.is_keyframe) keyframe_place_held_by_.reset();
   if (out.is_keyframe && options_.loop.enable && !lost_before &&
       (stereo || (prev_ && local_map_search_.has_map()))) {
     t0 = Clock::now();
-    out.loop = DetectLoop(frame, motion, &cur);
+    out.loop = DetectLoop(frame, motion, &cur, &out.place_held_by);
     out.timings.loop_ms = MsSince(t0);
   }
-  if (out.is_keyframe) out.place_held_by = keyframe_place_held_by_;
 
   // 6. The measurement.
   out.observations.reserve(n);

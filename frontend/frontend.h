@@ -146,10 +146,11 @@ class Frontend {
   // that carry no mapped id take the old landmark ids, which the estimator verifies by PnP.
   // True when a place was recognised.
   bool RelocalizeFromDatabase(const Frame& frame, TrackedFrame* cur);
-  // At a keyframe: searches the database, relabels the recognised points, adds the keyframe.
+  // At a keyframe: searches the database, relabels the recognised points, adds the keyframe
+  // unless an older entry holds its place (then *held_by: that entry's frame).
   std::optional<LoopDetection> DetectLoop(const Frame& frame,
                                           const std::optional<MotionEstimate>& motion,
-                                          TrackedFrame* cur);
+                                          TrackedFrame* cur, std::optional<FrameId>* held_by);
 
   StereoRig rig_;
   FrontendOptions options_;
@@ -160,9 +161,6 @@ class Frontend {
   WorkerThread detection_worker_;  // Detects the right image (persistent: keeps its scratch).
   std::optional<TrackedFrame> prev_;
   std::optional<TrackedFrame> keyframe_;
-  // The current keyframe's place was already held by an older keyframe's database entry
-  // (FrameMeasurement::place_held_by).
-  std::optional<FrameId> keyframe_place_held_by_;
   std::optional<TrackedFrame> tracked_keyframe_;  // The last keyframe the estimator tracked.
   Pose velocity_T_prev_cur_ = Pose::Identity();
   double mono_step_length_ = 1.0;  // One camera: the last non-zero dead-reckoned step (no unit).

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <string>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -36,13 +37,17 @@ SystemRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& opti
   return run;
 }
 
-// The first `frames` frames of the rendered rover loop, rendered with `seed`.
-sim::SimOptions RoverStretch(int frames, uint32_t seed) {
+// The first `frames` frames of the rendered preset, rendered with `seed`.
+sim::SimOptions PresetStretch(const std::string& preset, int frames, uint32_t seed) {
   sim::SimOptions sim;
-  sim.preset = "rover_loop";
+  sim.preset = preset;
   sim.frames = frames;
   sim.seed = seed;
   return sim;
+}
+
+sim::SimOptions RoverStretch(int frames, uint32_t seed) {
+  return PresetStretch("rover_loop", frames, seed);
 }
 
 // A 150-frame stretch of the rover loop (~28 m): every frame gets a pose, and the ATE is a
@@ -121,11 +126,7 @@ TEST(SystemE2e, BackgroundWindowSolveGivesTheSameTrajectory) {
 // keeps ~72 % and does not, so its trajectory is bit for bit the one without the option.
 // Measured (150 frames each): fast ATE 0.0232 m with it, 0.0435 m without; bound: at most 0.7x.
 TEST(SystemE2e, GuidedSearchTurnsOnWhereTracksBreak) {
-  sim::SimOptions fast;
-  fast.preset = "fast";
-  fast.frames = 150;
-  fast.seed = 1;
-  const sim::SyntheticSequence fast_seq(fast);
+  const sim::SyntheticSequence fast_seq(PresetStretch("fast", 150, 1));
   const sim::SyntheticSequence rover_seq(RoverStretch(150, 5));
   SystemOptions never;
   never.frontend.local_map.stereo_when_tracked_below = 0;
