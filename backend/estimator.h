@@ -8,6 +8,7 @@
 //   MonoEkfEstimator (backend/ekf):       the paper's bearing-only EKF-SLAM (Gaussian-sum init).
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -46,6 +47,9 @@ struct EstimatorOutput {
   int landmarks_in_state = 0;  // Landmarks currently estimated (window / filter state).
   // Keyframes the estimator's map holds now (the BA: made minus culled); -1: it keeps none.
   int keyframes_in_map = -1;
+  // The stereo rig's disparity offset in use after this frame (StereoIntrinsics::
+  // disparity_offset_px: calibrated or estimated online); nullopt: the estimator has none.
+  std::optional<double> disparity_offset_px;
   bool loop_closed = false;    // A loop closure corrected the trajectory at this frame.
 };
 
@@ -96,6 +100,10 @@ class Estimator {
   // landmarks the frontend recognised: frames before that get no pose); the run then goes on
   // in the map's frame and unit. False: this estimator cannot (the caller says so).
   virtual bool UseMap(const std::vector<MapPoint>& /*landmarks*/) { return false; }
+
+  // One line on the stereo rig's disparity offset the estimator uses and where it comes from
+  // ("0.309 px, calibrated online from 44 windows"); empty for an estimator without one.
+  virtual std::string DisparityOffsetNote() const { return {}; }
 };
 
 }  // namespace dala

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <iomanip>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <sstream>
@@ -437,7 +438,9 @@ void SlidingWindowEstimator::AddToWindow(const BaKeyframe& kf, const FrameMeasur
 void SlidingWindowEstimator::RestartWindow() {
   WaitForWindowSolve();
   added_since_window_start_ = 0;
+  const DisparityOffsetCalibration calibration = ba_.offset_calibration();
   ba_ = SlidingWindowBa(IntrinsicsOf(rig_, ba_.disparity_offset_px()), options_.ba);
+  ba_.set_offset_calibration(calibration);
   for (const auto& [id, p_w] : map_points_) ba_.SetLandmarkPosition(id, p_w);
   // The last keyframe left with the old window: its observations can pair with none of the new
   // window's keyframes (mono new landmarks, SelectKeyframeObservations).
@@ -660,6 +663,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   T_w_prev_ = T_w_c;
   out.T_w_c = T_w_c;
   out.keyframes_in_map = num_keyframes_in_map();
+  if (stereo) out.disparity_offset_px = ba_.disparity_offset_px();
   if (!stereo) NoteMonoTracking(m, out.valid, T_w_c, &out);
   // A lost stereo frame has no pose either: it would be an extrapolation (a lost keyframe still
   // joins the window at that guess, to carry the stereo landmarks it starts).
@@ -687,6 +691,34 @@ bool SlidingWindowEstimator::UseMap(const std::vector<MapPoint>& landmarks) {
   }
   awaiting_map_ = true;
   return true;
+}
+
+std::string SlidingWindowEstimator::DisparityOffsetNote() const {
+  if (!rig_.is_stereo()) return {};
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(3) << ba_.disparity_offset_px() << " px";
+  const SlidingWindowBa::Options& o = options_.ba;
+  if (o.estimate_disparity_offset) {
+    os << ", estimated in every window (ba.estimate_disparity_offset)";
+    return os.str();
+  }
+  if (!o.calibrate_disparity_offset) {
+    os << ", fixed (ba.calibrate_disparity_offset is off)";
+    return os.str();
+  }
+  const DisparityOffsetCalibration& c = ba_.offset_calibration();
+  if (ba_.disparity_offset_px() != 0.0) {
+    os << ", calibrated online from " << c.num_estimates() << " windows";
+  } else if (c.num_estimates() < o.offset_calibration.min_estimates) {
+    os << ": not calibrated, " << c.num_estimates() << " windows with enough motion (needs "
+       << o.offset_calibration.min_estimates << ")";
+  } else {
+    os << ": the " << c.num_estimates() << " windows estimated " << std::showpos << c.mean_px()
+       << std::noshowpos << " px on average, within what an exact rig shows (+-"
+       << o.offset_calibration.min_offset_px << " px): none applied";
+  }
+  if (!c.converged() && c.num_estimates() > 0) os << " (still calibrating)";
+  return os.str();
 }
 
 RefinementSummary SlidingWindowEstimator::Refine() {

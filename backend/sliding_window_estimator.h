@@ -199,6 +199,7 @@ class SlidingWindowEstimator : public Estimator {
   bool UseMap(const std::vector<MapPoint>& landmarks) override;
   // The global BA (see the class comment, "Refinement").
   RefinementSummary Refine() override;
+  std::string DisparityOffsetNote() const override;
 
   const SlidingWindowBa& ba() const {
     WaitForWindowSolve();

@@ -103,6 +103,7 @@ TrackResult System::Track(const Frame& frame) {
   s.keyframe = m.is_keyframe;
   s.places = static_cast<int>(places());
   s.keyframes_in_map = e.keyframes_in_map;
+  s.disparity_offset_px = e.disparity_offset_px;
   s.features = static_cast<int>(m.observations.size());
   for (const FeatureObservation& o : m.observations) s.tracked += o.track_length > 1;
   s.landmarks = e.landmarks_in_state;

@@ -51,6 +51,7 @@ struct FrameStats {
   // Keyframes in the estimator's map after this frame (EstimatorOutput::keyframes_in_map: made
   // minus culled; -1 for an estimator that keeps none).
   int keyframes_in_map = -1;
+  std::optional<double> disparity_offset_px;  // EstimatorOutput::disparity_offset_px.
   int features = 0;
   int tracked = 0;           // Observations continuing a track.
   int landmarks = 0;         // In the estimator's state.

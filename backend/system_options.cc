@@ -172,6 +172,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "mono_reinit_after_lost_frames", &b.mono_reinit_after_lost_frames);
   v->Field("ba", "estimate_disparity_offset", &b.ba.estimate_disparity_offset);
   v->Field("ba", "disparity_offset_prior_sigma_px", &b.ba.disparity_offset_prior_sigma_px);
+  v->Field("ba", "calibrate_disparity_offset", &b.ba.calibrate_disparity_offset);
   v->Field("ba", "max_landmark_depth_m", &b.max_landmark_depth_m);
   v->Field("ba", "background_solve", &b.background_solve);
   MonoInitializerOptions& mi = b.mono_init;

@@ -106,6 +106,9 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"keyframe", s.keyframe},
           {"places", s.places},
           {"keyframes_in_map", s.keyframes_in_map},
+          // The stereo rig's disparity offset in use (px; null: the estimator has none).
+          {"disparity_offset_px", s.disparity_offset_px ? nlohmann::json(*s.disparity_offset_px)
+                                                        : nlohmann::json(nullptr)},
           {"features", s.features},
           {"tracked", s.tracked},
           {"landmarks", s.landmarks},
@@ -297,6 +300,9 @@ int RunRun(const std::vector<std::string>& args) {
       {"frames_with_pose", trajectory.size()},
       // "scale" is the evaluation's Sim(3) scale (below): what fixes the map's unit is this.
       {"scale_source", system.ScaleDescription()},
+      // The stereo rig's disparity offset at the end and where it comes from (Estimator::
+      // DisparityOffsetNote; empty: none).
+      {"disparity_offset", system.estimator().DisparityOffsetNote()},
       {"keyframes", keyframes},
       // Keyframes left in the estimator's map (made minus culled; -1: the estimator keeps none).
       {"keyframes_in_map", keyframes_in_map},
@@ -420,6 +426,9 @@ int RunRun(const std::vector<std::string>& args) {
             << keyframes << " keyframes, " << loops << " loops detected, " << loops_closed
             << " closed)\n"
             << "scale       " << system.ScaleDescription() << "\n";
+  if (const std::string note = system.estimator().DisparityOffsetNote(); !note.empty()) {
+    std::cout << "disparity   offset " << note << "\n";
+  }
   if (!FLAGS_map.empty()) {
     std::cout << "saved map   " << FLAGS_map << ": "
               << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)

@@ -30,6 +30,10 @@ DEFINE_double(brightness, 0.0,
               "amplitude of the global brightness change (image gain 1 +- this, slow sine)");
 DEFINE_double(fps, 10.0, "frame rate (Hz)");
 DEFINE_double(baseline, 0.4, "stereo baseline (m)");
+DEFINE_double(right_cx_error_px, 0.0,
+              "render the right image with its principal point this many pixels off calib.txt's "
+              "(every disparity that much too small, as a real rig's rectification error leaves "
+              "it; KITTI 06: ~0.3): a rig to test the disparity-offset calibration on");
 
 namespace dala {
 namespace {
@@ -52,6 +56,7 @@ int RunSynth(const std::vector<std::string>& args) {
   options.brightness_change = FLAGS_brightness;
   options.fps = FLAGS_fps;
   options.baseline = FLAGS_baseline;
+  options.right_cx_error_px = FLAGS_right_cx_error_px;
   std::string why;
   if (!options.IsValid(&why)) throw Error() << "invalid option: " << why;
 

@@ -62,8 +62,14 @@
 #include <string>
 #include <vector>
 
+#include <ceres/loss_function.h>
+#include <ceres/manifold.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+
 #include "backend/ba/ba_loss.h"
 #include "backend/ba/ba_types.h"
+#include "backend/ba/disparity_offset_calibration.h"
 #include "backend/ba/marginalization.h"
 #include "backend/ba/pose_block.h"
 #include "backend/ba/pose_only.h"
@@ -125,6 +131,13 @@ class SlidingWindowBa {
     // use the last estimate (held constant there).
     bool estimate_disparity_offset = false;
     double disparity_offset_prior_sigma_px = 1.0;
+    // Stereo, when estimate_disparity_offset is off: calibrate the offset once for the rig
+    // (DisparityOffsetCalibration). After each window solve a second solve on a copy of the
+    // window's state, with the offset free, estimates it; the main state does not move with
+    // it. The rig's offset becomes the calibrated value when the estimates agree on one
+    // (0 until then, and on a rig whose estimates centre on 0).
+    bool calibrate_disparity_offset = true;
+    DisparityOffsetCalibration::Options offset_calibration;
     int num_threads = 1;            // > 1 may change the result in the last bits.
     bool remove_outliers = true;    // chi-square 95% test after each solve, then re-solve.
     int max_outlier_rounds = 2;     // re-solves after removing outliers.
@@ -200,6 +213,12 @@ class SlidingWindowBa {
   // The rig's disparity offset as last estimated (StereoIntrinsics::disparity_offset_px; 0
   // until a window solve estimated it, or when Options::estimate_disparity_offset is off).
   double disparity_offset_px() const { return K_.disparity_offset_px; }
+  // The rig's disparity-offset calibration (Options::calibrate_disparity_offset), handed from
+  // a window to the one that replaces it: the offset is the rig's, not the window's.
+  const DisparityOffsetCalibration& offset_calibration() const { return offset_calibration_; }
+  void set_offset_calibration(const DisparityOffsetCalibration& calibration) {
+    offset_calibration_ = calibration;
+  }
   // Landmarks with a position that are currently in the window's map.
   std::map<LandmarkId, Eigen::Vector3d> Landmarks() const;
   const std::vector<MarginalizedKeyframe>& marginalized_keyframes() const { return marginalized_; }
@@ -216,6 +235,8 @@ class SlidingWindowBa {
   };
 
   void MarginalizeOldest();
+  // Forgets the marginalisation prior; the oldest window keyframe then holds the gauge.
+  void DropPrior();
   // Moves the leaving keyframe into held_ with the observations that `consumed` (landmarks
   // marginalised into the prior) leaves, dropping the oldest held keyframe beyond the bound.
   void Hold(KeyframeState leaving, const std::set<LandmarkId>& consumed);
@@ -225,6 +246,19 @@ class SlidingWindowBa {
   std::map<LandmarkId, int> CountObservations() const;
   bool TriangulateMono(LandmarkId id, Eigen::Vector3d* p_w) const;
   bool IsHeldConstant(size_t window_index) const;  // in the window solves (the gauge).
+  // Adds the window's (and the held keyframes') poses, their residuals on the active
+  // landmarks and the priors to `problem`. `offset`: nullptr = the rig's disparity offset is
+  // K_'s constant; else a variable at *offset shared by the stereo residuals (with its prior).
+  // Returns the active landmarks; *num_held_used: held keyframes with a residual.
+  std::set<LandmarkId> BuildProblem(const std::map<LandmarkId, int>& counts,
+                                    ceres::Manifold* manifold, ceres::LossFunction* loss,
+                                    double* offset, ceres::Problem* problem, int* num_held_used);
+  ceres::Solver::Options SolverOptions() const;
+  // The window solved again with the disparity offset free, the state restored after: the
+  // offset the window would choose (nullopt: no stereo residual, or the solve failed).
+  std::optional<double> EstimateOffsetAside();
+  // The largest distance between two window keyframes (metres).
+  double WindowSpan() const;
 
   StereoIntrinsics K_;
   Options options_;
@@ -237,6 +271,8 @@ class SlidingWindowBa {
   std::map<LandmarkId, Eigen::Vector3d> landmarks_;
   MarginalizationPrior prior_;
   std::vector<MarginalizedKeyframe> marginalized_;
+  DisparityOffsetCalibration offset_calibration_;
+  double prior_offset_px_ = 0.0;  // the disparity offset the prior was built with.
 };
 
 }  // namespace dala

@@ -87,6 +87,8 @@ void WriteMarker(const std::string& path, const SyntheticSequence& seq) {
   fs << "width" << c.width << "height" << c.height;
   fs << "fx" << c.fx << "fy" << c.fy << "cx" << c.cx << "cy" << c.cy;
   fs << "baseline" << (o.stereo ? o.baseline : 0.0);
+  // The right image's principal point error (not in calib.txt): a rig to test calibration on.
+  fs << "right_cx_error_px" << (o.stereo ? o.right_cx_error_px : 0.0);
   fs << "stereo" << static_cast<int>(o.stereo);
   fs << "fps" << o.fps;
   fs << "frames" << static_cast<int>(seq.size());

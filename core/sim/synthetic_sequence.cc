@@ -36,6 +36,8 @@ bool SimOptions::IsValid(std::string* why) const {
     os << "fps must be in (0, 10000], got " << fps;
   } else if (stereo && !(baseline > 0)) {
     os << "baseline must be > 0 for stereo, got " << baseline;
+  } else if (!(std::abs(right_cx_error_px) <= 10)) {
+    os << "right_cx_error_px must be within +-10 pixels, got " << right_cx_error_px;
   } else if (!(noise_sigma >= 0)) {
     os << "noise sigma must be >= 0, got " << noise_sigma;
   } else if (motion_blur && (blur_samples == 1 || blur_samples < 0 || blur_samples > 64)) {
@@ -109,6 +111,8 @@ cv::Mat SyntheticSequence::RenderView(const Pose& T_w_c, cv::Mat* depth) const {
 cv::Mat SyntheticSequence::RenderCamera(size_t i, int cam) const {
   const double t = static_cast<double>(i) / options_.fps;
   const Pose T_c0_c = cam == 0 ? Pose::Identity() : T_c0_c1();
+  PinholeCamera camera = camera_;
+  if (cam == 1) camera.cx += options_.right_cx_error_px;
   cv::Mat radiance;
   if (options_.motion_blur) {
     const double exposure = options_.exposure_fraction / options_.fps;
@@ -125,12 +129,12 @@ cv::Mat SyntheticSequence::RenderCamera(size_t i, int cam) const {
     cv::Mat sum = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1), sample;
     for (int k = 0; k < n; ++k) {
       const double tk = t + exposure * (static_cast<double>(k) / (n - 1) - 0.5);
-      RenderScene(world_.scene, camera_, world_.path->T_w_c(tk) * T_c0_c, &sample);
+      RenderScene(world_.scene, camera, world_.path->T_w_c(tk) * T_c0_c, &sample);
       sum += sample;
     }
     radiance = sum * (1.0 / n);
   } else {
-    RenderScene(world_.scene, camera_, world_.path->T_w_c(t) * T_c0_c, &radiance);
+    RenderScene(world_.scene, camera, world_.path->T_w_c(t) * T_c0_c, &radiance);
   }
   if (options_.brightness_change > 0) {
     SimRng phase_rng(MixSeed(options_.seed, 77));

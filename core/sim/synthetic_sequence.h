@@ -46,6 +46,11 @@ struct SimOptions {
   double cy = -1.0;
   // Stereo baseline (m); the right camera is at +baseline along the left camera's x axis.
   double baseline = 0.4;
+  // A rectification error to test against: the right image is rendered with its principal
+  // point this many pixels right of the rig's (calib.txt still gives the exact, shared cx), so
+  // every disparity u_l - u_r comes out this much too small (KITTI 06's rig: ~0.3 px;
+  // docs/backend.md, "The rig's disparity offset"). 0: an exact rig.
+  double right_cx_error_px = 0.0;
   // Frame rate (Hz): frame i is at t = i / fps.
   double fps = 10.0;
   // Render the right image too.

@@ -269,8 +269,9 @@ TEST(SlidingWindowBaTest, GrossOutliersAreRemoved) {
 }
 
 // A rig whose disparities are all 0.4 px too small (what KITTI's rectification leaves, ~0.3 px):
-// estimated with the window (Options::estimate_disparity_offset), the offset is found and the
-// scale error it caused is mostly gone.
+// estimated with the window (Options::estimate_disparity_offset) or calibrated once for the rig
+// from aside solves (Options::calibrate_disparity_offset, the default), the offset is found and
+// the scale error it caused is mostly gone.
 TEST(SlidingWindowBaTest, EstimatesTheRigsDisparityOffset) {
   BaSceneOptions o = SmallScene();
   o.num_keyframes = 40;
@@ -284,18 +285,53 @@ TEST(SlidingWindowBaTest, EstimatesTheRigsDisparityOffset) {
   }
   SlidingWindowBa::Options options;
   options.estimate_disparity_offset = false;
+  options.calibrate_disparity_offset = false;
   SlidingWindowBa ignored(scene.K, options);
   const double ate_ignored = AlignedAte(RunSequential(scene, options, 7, &ignored), scene.T_w_c_gt);
   options.estimate_disparity_offset = true;
   SlidingWindowBa estimated(scene.K, options);
   const double ate_estimated =
       AlignedAte(RunSequential(scene, options, 7, &estimated), scene.T_w_c_gt);
-  std::cout << "[ measured ] offset " << estimated.disparity_offset_px() << " px (true " << offset
-            << "); ATE " << ate_estimated << " m estimated, " << ate_ignored << " m ignored"
-            << std::endl;
+  options.estimate_disparity_offset = false;
+  options.calibrate_disparity_offset = true;
+  SlidingWindowBa calibrated(scene.K, options);
+  const double ate_calibrated =
+      AlignedAte(RunSequential(scene, options, 7, &calibrated), scene.T_w_c_gt);
+  std::cout << "[ measured ] offset " << estimated.disparity_offset_px() << " px estimated, "
+            << calibrated.disparity_offset_px() << " px calibrated (true " << offset << "); ATE "
+            << ate_estimated << " m estimated, " << ate_calibrated << " m calibrated, "
+            << ate_ignored << " m ignored" << std::endl;
   EXPECT_EQ(ignored.disparity_offset_px(), 0.0);
   EXPECT_NEAR(estimated.disparity_offset_px(), offset, 0.1);
+  EXPECT_NEAR(calibrated.disparity_offset_px(), offset, 0.1);
+  EXPECT_GE(calibrated.offset_calibration().num_estimates(), 8);
   EXPECT_LT(ate_estimated, 0.5 * ate_ignored);
+  EXPECT_LT(ate_calibrated, 0.5 * ate_ignored);
+}
+
+// On an exact rig the calibration finds nothing to apply: the window solves never see an offset
+// and the trajectory is bit for bit the one without the calibration (it only costs the aside
+// solves' time).
+TEST(SlidingWindowBaTest, CalibrationLeavesAnExactRigAlone) {
+  BaSceneOptions o = SmallScene();
+  o.num_keyframes = 40;
+  o.pixel_noise = 0.3;
+  const BaScene scene = MakeBaScene(o);
+  SlidingWindowBa::Options options;
+  options.calibrate_disparity_offset = false;
+  SlidingWindowBa off(scene.K, options);
+  const std::vector<Pose> poses_off = RunSequential(scene, options, 7, &off);
+  options.calibrate_disparity_offset = true;
+  SlidingWindowBa on(scene.K, options);
+  const std::vector<Pose> poses_on = RunSequential(scene, options, 7, &on);
+  std::cout << "[ measured ] exact rig: " << on.offset_calibration().num_estimates()
+            << " estimates, mean " << on.offset_calibration().mean_px() << " px" << std::endl;
+  EXPECT_GE(on.offset_calibration().num_estimates(), 8);
+  EXPECT_EQ(on.disparity_offset_px(), 0.0);
+  ASSERT_EQ(poses_on.size(), poses_off.size());
+  for (size_t i = 0; i < poses_on.size(); ++i) {
+    EXPECT_EQ(poses_on[i].matrix(), poses_off[i].matrix()) << "keyframe " << i;
+  }
 }
 
 // Options::num_held_keyframes: the last keyframes to leave the window stay beside it as
