@@ -549,6 +549,9 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     T_w_prev_ = keyframe_poses_.at(*solved_in_background_);
     solved_in_background_.reset();
   }
+  // The offset this frame is tracked with; read here, while no window solve runs (one started
+  // below may change it in the background: SlidingWindowBa calibrates it).
+  const double disparity_offset_px = ba_.disparity_offset_px();
   CullHeldKeyframes();
   // Lost for long (mono): a frame that relocalises in the old map resumes it; else the new
   // map's initialisation goes on.
@@ -663,7 +666,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   T_w_prev_ = T_w_c;
   out.T_w_c = T_w_c;
   out.keyframes_in_map = num_keyframes_in_map();
-  if (stereo) out.disparity_offset_px = ba_.disparity_offset_px();
+  if (stereo) out.disparity_offset_px = disparity_offset_px;
   if (!stereo) NoteMonoTracking(m, out.valid, T_w_c, &out);
   // A lost stereo frame has no pose either: it would be an extrapolation (a lost keyframe still
   // joins the window at that guess, to carry the stereo landmarks it starts).
@@ -695,6 +698,7 @@ bool SlidingWindowEstimator::UseMap(const std::vector<MapPoint>& landmarks) {
 
 std::string SlidingWindowEstimator::DisparityOffsetNote() const {
   if (!rig_.is_stereo()) return {};
+  WaitForWindowSolve();
   std::ostringstream os;
   os << std::fixed << std::setprecision(3) << ba_.disparity_offset_px() << " px";
   const SlidingWindowBa::Options& o = options_.ba;

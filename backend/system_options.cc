@@ -76,6 +76,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   KeyframePolicyOptions& k = o->frontend.keyframe;
   v->Field("keyframe", "min_tracked_fraction", &k.min_tracked_fraction);
   v->Field("keyframe", "max_parallax_px", &k.max_parallax_px);
+  v->Field("keyframe", "max_distance_baselines", &k.max_distance_baselines);
   v->Field("keyframe", "max_distance_m", &k.max_distance_m);
   v->Field("keyframe", "max_rotation_rad", &k.max_rotation_rad);
   v->Field("keyframe", "max_frames", &k.max_frames);

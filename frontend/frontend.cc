@@ -546,8 +546,9 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
       evidence.median_parallax_px = parallax[parallax.size() / 2];
     }
     evidence.T_kf_cur = keyframe_->T_w_c.inverse() * cur.T_w_c;
-    // One camera: the dead-reckoned translation has no unit, so no criterion in metres.
+    // One camera: the dead-reckoned translation has no unit, so no criterion on distance.
     if (!stereo) evidence.T_kf_cur.translation().setZero();
+    evidence.stereo_baseline_m = stereo ? rig_.baseline : 0.0;
     out.tracked_fraction = evidence.tracked_fraction;
     out.is_keyframe = keyframe_policy_.IsKeyframe(evidence);
   }

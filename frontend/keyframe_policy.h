@@ -13,8 +13,11 @@ namespace dala {
 //    `min_tracked_fraction` (the view has changed: new landmarks are needed);
 //  - the median image displacement of the landmarks tracked since the keyframe (parallax)
 //    exceeds `max_parallax_px` (enough baseline for the monocular estimators);
-//  - the camera travelled more than `max_distance_m` (0: never; a distance is a property of one
-//    rig and one speed, configs/kitti.yaml turns it off) or turned more than `max_rotation_rad`;
+//  - a stereo camera travelled more than `max_distance_baselines` stereo baselines (the
+//    temporal baseline to the keyframe against the rig's own: a distance in the rig's unit, not
+//    in metres, so it scales with the rig; 2.5 = 1 m on the rendered 0.4 m rig, 1.34 m on
+//    KITTI's 0.54 m one; docs/backend.md, "Keyframes"), or more than `max_distance_m` metres
+//    (an optional cap, off by default), or turned more than `max_rotation_rad`;
 //  - `max_frames` frames passed (bounded gap for the backend) AND the view has changed at
 //    all: a median parallax of at least `min_parallax_px` or a rotation of at least a tenth of
 //    `max_rotation_rad`. A still camera (parallax of the image noise only) adds no keyframe, so
@@ -24,7 +27,8 @@ namespace dala {
 struct KeyframePolicyOptions {
   double min_tracked_fraction = 0.6;
   double max_parallax_px = 30.0;
-  double max_distance_m = 1.0;  // 0: off.
+  double max_distance_baselines = 2.5;  // stereo only; 0: off.
+  double max_distance_m = 0.0;  // 0: off.
   double max_rotation_rad = 0.17;  // ~10 degrees.
   int max_frames = 10;
   double min_parallax_px = 1.0;  // ...for the frame-count criterion (see above).
@@ -38,6 +42,7 @@ struct KeyframeEvidence {
   double tracked_fraction = 1.0;
   double median_parallax_px = 0.0;
   Pose T_kf_cur = Pose::Identity();  // Current camera in the keyframe's camera (estimated).
+  double stereo_baseline_m = 0.0;    // The rig's baseline; 0: one camera (no distance unit).
 };
 
 class KeyframePolicy {

@@ -27,14 +27,28 @@ TEST(KeyframePolicy, EachCriterionNamesItself) {
   e.median_parallax_px = 31;
   ASSERT_TRUE(policy.IsKeyframe(e, &reason));
   EXPECT_EQ(std::string(reason), "parallax");
+  // Distance in stereo baselines (2.5 by default): 1.2 m is past 2.5 x 0.4 m, not 2.5 x 0.54 m.
   e = Still(2);
-  e.T_kf_cur.translation().z() = 1.5;
+  e.T_kf_cur.translation().z() = 1.2;
+  e.stereo_baseline_m = 0.4;
   ASSERT_TRUE(policy.IsKeyframe(e, &reason));
   EXPECT_EQ(std::string(reason), "distance");
-  KeyframePolicyOptions no_metres;
-  no_metres.max_distance_m = 0;  // Off: a distance alone makes no keyframe.
+  e.stereo_baseline_m = 0.54;
+  EXPECT_FALSE(policy.IsKeyframe(e));
+  e.stereo_baseline_m = 0.0;  // One camera: no distance unit, no distance criterion.
   e.T_kf_cur.translation().z() = 100;
-  EXPECT_FALSE(KeyframePolicy(no_metres).IsKeyframe(e));
+  EXPECT_FALSE(policy.IsKeyframe(e));
+  // The optional metric cap (off by default).
+  KeyframePolicyOptions metres;
+  metres.max_distance_m = 1.0;
+  e.T_kf_cur.translation().z() = 1.5;
+  ASSERT_TRUE(KeyframePolicy(metres).IsKeyframe(e, &reason));
+  EXPECT_EQ(std::string(reason), "distance");
+  KeyframePolicyOptions none;
+  none.max_distance_baselines = 0;  // Off: a distance alone makes no keyframe.
+  e.stereo_baseline_m = 0.4;
+  e.T_kf_cur.translation().z() = 100;
+  EXPECT_FALSE(KeyframePolicy(none).IsKeyframe(e));
   e = Still(2);
   e.T_kf_cur.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()).toRotationMatrix();
   ASSERT_TRUE(policy.IsKeyframe(e, &reason));
@@ -73,6 +87,10 @@ TEST(KeyframePolicy, InvalidOptionsAreRejected) {
   o.max_distance_m = -1;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("max_distance_m"), std::string::npos);
+  o = KeyframePolicyOptions();
+  o.max_distance_baselines = -1;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("max_distance_baselines"), std::string::npos);
 }
 
 }  // namespace
