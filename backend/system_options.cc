@@ -174,6 +174,16 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "estimate_disparity_offset", &b.ba.estimate_disparity_offset);
   v->Field("ba", "disparity_offset_prior_sigma_px", &b.ba.disparity_offset_prior_sigma_px);
   v->Field("ba", "calibrate_disparity_offset", &b.ba.calibrate_disparity_offset);
+  // The calibration's tests (backend/ba/disparity_offset_calibration.h).
+  DisparityOffsetCalibration::Options& oc = b.ba.offset_calibration;
+  v->Field("ba", "offset_calibration_min_estimates", &oc.min_estimates);
+  v->Field("ba", "offset_calibration_min_offset_px", &oc.min_offset_px);
+  v->Field("ba", "offset_calibration_min_mean_over_sd", &oc.min_mean_over_sd);
+  v->Field("ba", "offset_calibration_converged_after_estimates", &oc.converged_after_estimates);
+  v->Field("ba", "offset_calibration_stable_px", &oc.stable_px);
+  v->Field("ba", "offset_calibration_min_window_span_baselines", &oc.min_window_span_baselines);
+  v->Field("ba", "offset_calibration_max_prior_offset_change_px",
+           &oc.max_prior_offset_change_px);
   v->Field("ba", "max_landmark_depth_m", &b.max_landmark_depth_m);
   v->Field("ba", "background_solve", &b.background_solve);
   MonoInitializerOptions& mi = b.mono_init;

@@ -10,18 +10,20 @@ bool DisparityOffsetCalibration::Options::IsValid(std::string* why) const {
     if (why) *why = msg;
     return false;
   };
-  if (min_estimates < 2) return fail("offset_calibration.min_estimates must be >= 2");
-  if (!(min_offset_px >= 0.0)) return fail("offset_calibration.min_offset_px must be >= 0");
-  if (!(min_mean_over_sd >= 0.0)) return fail("offset_calibration.min_mean_over_sd must be >= 0");
+  if (min_estimates < 2) return fail("offset_calibration_min_estimates must be >= 2");
+  if (!(min_offset_px >= 0.0)) return fail("offset_calibration_min_offset_px must be >= 0");
+  if (!(min_mean_over_sd >= 0.0)) return fail("offset_calibration_min_mean_over_sd must be >= 0");
   if (converged_after_estimates < min_estimates) {
-    return fail("offset_calibration.converged_after_estimates must be >= min_estimates");
+    return fail(
+        "offset_calibration_converged_after_estimates must be >= "
+        "offset_calibration_min_estimates");
   }
-  if (!(stable_px >= 0.0)) return fail("offset_calibration.stable_px must be >= 0");
+  if (!(stable_px >= 0.0)) return fail("offset_calibration_stable_px must be >= 0");
   if (!(min_window_span_baselines >= 0.0)) {
-    return fail("offset_calibration.min_window_span_baselines must be >= 0");
+    return fail("offset_calibration_min_window_span_baselines must be >= 0");
   }
   if (!(max_prior_offset_change_px >= 0.0)) {
-    return fail("offset_calibration.max_prior_offset_change_px must be >= 0");
+    return fail("offset_calibration_max_prior_offset_change_px must be >= 0");
   }
   return true;
 }
@@ -34,7 +36,9 @@ void DisparityOffsetCalibration::Add(double estimate_px) {
   if (n_ < options_.min_estimates) return;
   const double mean = sum_ / n_;
   const double sd = std::sqrt(std::max(0.0, sum_sq_ / n_ - mean * mean));
-  if (std::abs(mean) >= options_.min_offset_px && std::abs(mean) >= options_.min_mean_over_sd * sd) {
+  const bool beyond_bias = std::abs(mean) >= options_.min_offset_px;
+  const bool agreed = std::abs(mean) >= options_.min_mean_over_sd * sd;
+  if (beyond_bias && agreed) {
     offset_px_ = mean;
   }
   recent_means_.push_back(mean);

@@ -14,6 +14,17 @@
 #include "backend/ba/solver_time.h"
 
 namespace dala {
+namespace {
+
+// The window's problems borrow the manifold and loss objects, which outlive them.
+ceres::Problem::Options BorrowingProblemOptions() {
+  ceres::Problem::Options options;
+  options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  return options;
+}
+
+}  // namespace
 
 bool SlidingWindowBa::Options::IsValid(std::string* why) const {
   auto fail = [&](const char* msg) {
@@ -287,7 +298,7 @@ void SlidingWindowBa::Hold(KeyframeState leaving, const std::set<LandmarkId>& co
 std::set<LandmarkId> SlidingWindowBa::BuildProblem(const std::map<LandmarkId, int>& counts,
                                                    ceres::Manifold* manifold,
                                                    ceres::LossFunction* loss, double* offset,
-                                                   ceres::Problem* problem,
+                                                   bool with_prior, ceres::Problem* problem,
                                                    int* num_held_used) {
   for (size_t i = 0; i < window_.size(); ++i) {
     problem->AddParameterBlock(window_[i].x.data(), 7, manifold);
@@ -328,7 +339,7 @@ std::set<LandmarkId> SlidingWindowBa::BuildProblem(const std::map<LandmarkId, in
     problem->AddResidualBlock(CreateOffsetPriorCost(options_.disparity_offset_prior_sigma_px),
                               nullptr, offset);
   }
-  if (!prior_.empty()) {
+  if (with_prior && !prior_.empty()) {
     std::map<KeyframeId, double*> block_of;
     for (KeyframeState& kf : window_) block_of[kf.id] = kf.x.data();
     std::vector<double*> blocks;
@@ -355,7 +366,8 @@ double SlidingWindowBa::WindowSpan() const {
   double span = 0.0;
   for (const KeyframeState& a : window_) {
     for (const KeyframeState& b : window_) {
-      span = std::max(span, (BlockToPose(a.x).translation() - BlockToPose(b.x).translation()).norm());
+      const Eigen::Vector3d d = BlockToPose(a.x).translation() - BlockToPose(b.x).translation();
+      span = std::max(span, d.norm());
     }
   }
   return span;
@@ -373,10 +385,7 @@ std::optional<double> SlidingWindowBa::EstimateOffsetAside() {
   }
   auto manifold = MakePoseManifold();
   auto loss = MakeLoss(options_.loss, options_.loss_scale);
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
+  ceres::Problem problem(BorrowingProblemOptions());
   double offset = K_.disparity_offset_px;
   int num_held_used = 0;
   // Without the marginalisation prior: it holds the scale the window had under the offset in
@@ -384,9 +393,8 @@ std::optional<double> SlidingWindowBa::EstimateOffsetAside() {
   // 0.4 px offset: 0.33 px calibrated with the prior, 0.39 without;
   // SlidingWindowBaTest.EstimatesTheRigsDisparityOffset). The window's oldest keyframe holds
   // the gauge either way (IsHeldConstant).
-  MarginalizationPrior prior;
-  std::swap(prior, prior_);
-  BuildProblem(counts, manifold.get(), loss.get(), &offset, &problem, &num_held_used);
+  BuildProblem(counts, manifold.get(), loss.get(), &offset, /*with_prior=*/false, &problem,
+               &num_held_used);
   std::optional<double> estimate;
   if (problem.HasParameterBlock(&offset)) {
     // From the main solve's optimum the offset's pull changes the cost by less than the main
@@ -399,7 +407,6 @@ std::optional<double> SlidingWindowBa::EstimateOffsetAside() {
   }
   for (size_t i = 0; i < window_.size(); ++i) window_[i].x = poses[i];
   for (const auto& [id, p_w] : landmarks_before) landmarks_[id] = p_w;
-  std::swap(prior, prior_);
   return estimate;
 }
 
@@ -415,16 +422,13 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
   std::set<LandmarkId> active_before;
   for (int round = 0;; ++round) {
     const auto counts = CountObservations();
-    ceres::Problem::Options problem_options;
-    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(problem_options);
+    ceres::Problem problem(BorrowingProblemOptions());
     // The rig's disparity offset, estimated with the window (see Options).
     const bool estimate_offset = options_.estimate_disparity_offset && K_.is_stereo();
     double offset = K_.disparity_offset_px;
     const std::set<LandmarkId> active =
         BuildProblem(counts, manifold.get(), loss.get(), estimate_offset ? &offset : nullptr,
-                     &problem, &summary.num_held_keyframes);
+                     /*with_prior=*/true, &problem, &summary.num_held_keyframes);
     if (round == 0) active_before = active;
     summary.num_landmarks = static_cast<int>(active.size());
     summary.num_residual_blocks = problem.NumResidualBlocks();

@@ -249,10 +249,12 @@ class SlidingWindowBa {
   // Adds the window's (and the held keyframes') poses, their residuals on the active
   // landmarks and the priors to `problem`. `offset`: nullptr = the rig's disparity offset is
   // K_'s constant; else a variable at *offset shared by the stereo residuals (with its prior).
-  // Returns the active landmarks; *num_held_used: held keyframes with a residual.
+  // with_prior: add the marginalisation prior. Returns the active landmarks; *num_held_used:
+  // held keyframes with a residual.
   std::set<LandmarkId> BuildProblem(const std::map<LandmarkId, int>& counts,
                                     ceres::Manifold* manifold, ceres::LossFunction* loss,
-                                    double* offset, ceres::Problem* problem, int* num_held_used);
+                                    double* offset, bool with_prior, ceres::Problem* problem,
+                                    int* num_held_used);
   ceres::Solver::Options SolverOptions() const;
   // The window solved again with the disparity offset free, the state restored after: the
   // offset the window would choose (nullopt: no stereo residual, or the solve failed).
