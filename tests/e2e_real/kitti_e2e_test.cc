@@ -1,6 +1,6 @@
 // The estimators on real images: `dala run` (the binary) over KITTI 06 frames 0-50.
 // - The stereo BA with the KITTI options (configs/kitti.yaml: the defaults since 2026-12-03:
-//   the rig's disparity offset calibrated online, 0.309 px; the guided search of the window's
+//   the rig's disparity offset calibrated online, 0.255 px; the guided search of the window's
 //   landmarks turns itself on, the car's tracks break; no depth limit; a keyframe every 2.5
 //   stereo baselines, 1.34 m: 28 keyframes). Documented in docs/results.md: ATE 0.0230 m
 //   (SE(3)), RPE over one frame 0.0131 m, every frame tracked. Bounds 1.5x; without the offset
