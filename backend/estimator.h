@@ -104,6 +104,8 @@ class Estimator {
   // One line on the stereo rig's disparity offset the estimator uses and where it comes from
   // ("0.309 px, calibrated online from 44 windows"); empty for an estimator without one.
   virtual std::string DisparityOffsetNote() const { return {}; }
+  // Its value now (pixels); nullopt for an estimator without one.
+  virtual std::optional<double> DisparityOffsetPx() const { return std::nullopt; }
 };
 
 }  // namespace dala

@@ -696,6 +696,12 @@ bool SlidingWindowEstimator::UseMap(const std::vector<MapPoint>& landmarks) {
   return true;
 }
 
+std::optional<double> SlidingWindowEstimator::DisparityOffsetPx() const {
+  if (!rig_.is_stereo()) return std::nullopt;
+  WaitForWindowSolve();
+  return ba_.disparity_offset_px();
+}
+
 std::string SlidingWindowEstimator::DisparityOffsetNote() const {
   if (!rig_.is_stereo()) return {};
   WaitForWindowSolve();

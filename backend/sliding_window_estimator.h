@@ -200,6 +200,7 @@ class SlidingWindowEstimator : public Estimator {
   // The global BA (see the class comment, "Refinement").
   RefinementSummary Refine() override;
   std::string DisparityOffsetNote() const override;
+  std::optional<double> DisparityOffsetPx() const override;
 
   const SlidingWindowBa& ba() const {
     WaitForWindowSolve();

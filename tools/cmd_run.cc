@@ -303,6 +303,10 @@ int RunRun(const std::vector<std::string>& args) {
       // The stereo rig's disparity offset at the end and where it comes from (Estimator::
       // DisparityOffsetNote; empty: none).
       {"disparity_offset", system.estimator().DisparityOffsetNote()},
+      // Its value in pixels (null: the estimator has none).
+      {"disparity_offset_px", system.estimator().DisparityOffsetPx()
+                                  ? nlohmann::json(*system.estimator().DisparityOffsetPx())
+                                  : nlohmann::json(nullptr)},
       {"keyframes", keyframes},
       // Keyframes left in the estimator's map (made minus culled; -1: the estimator keeps none).
       {"keyframes_in_map", keyframes_in_map},

@@ -79,6 +79,7 @@ bool ReadReport(const std::string& path, BenchRunResult* r, RunSeries* series) {
   r->keyframes = IntAt(report, {"summary", "keyframes"});
   r->keyframes_in_map = IntAt(report, {"summary", "keyframes_in_map"});
   if (r->keyframes_in_map && *r->keyframes_in_map < 0) r->keyframes_in_map.reset();
+  r->disparity_offset_px = NumberAt(report, {"summary", "disparity_offset_px"});
   r->tracking_failures = IntAt(report, {"summary", "tracking_failures"});
   if (!r->tracking_failures && r->frames) r->tracking_failures = lost;
   return true;

@@ -63,6 +63,8 @@ const std::vector<Column>& Columns() {
       {"landmarks", "landmarks", [](const auto& r) { return Int(r.landmarks); }},
       {"keyframes", "keyframes", [](const auto& r) { return Int(r.keyframes); }},
       {"keyframes_in_map", "in map", [](const auto& r) { return Int(r.keyframes_in_map); }},
+      {"disparity_offset_px", "offset px",
+       [](const auto& r) { return Fixed(r.disparity_offset_px, 3); }},
       {"tracking_failures", "lost", [](const auto& r) { return Int(r.tracking_failures); }},
       {"alignment", "align", [](const auto& r) { return r.alignment; }},
       {"error", "error", [](const auto& r) { return r.error; }},

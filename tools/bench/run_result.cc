@@ -37,6 +37,7 @@ void ForEachField(R& r, F&& f) {
   f("landmarks", r.landmarks);
   f("keyframes", r.keyframes);
   f("keyframes_in_map", r.keyframes_in_map);
+  f("disparity_offset_px", r.disparity_offset_px);
   f("tracking_failures", r.tracking_failures);
   f("frames", r.frames);
   f("alignment", r.alignment);

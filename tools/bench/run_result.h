@@ -42,6 +42,9 @@ struct BenchRunResult {
   std::optional<int> landmarks, keyframes, tracking_failures;
   // Keyframes left in the map after culling (absent: the estimator keeps none, the EKFs).
   std::optional<int> keyframes_in_map;
+  // The stereo rig's disparity offset at the end of the run, px (absent: the estimator has
+  // none; the BA calibrates it, docs/backend.md).
+  std::optional<double> disparity_offset_px;
 
   // Re-evaluated by the harness (core/eval Evaluate), see docs/benchmarking.md.
   std::string alignment;  // "se3" (stereo) | "sim3" (mono).

@@ -127,6 +127,7 @@ TEST_F(BenchCli, RecordsMetricsOfEveryRunAndItsFailures) {
       EXPECT_EQ(run["landmarks"], 4321);
       EXPECT_EQ(run["keyframes"], 16);
       EXPECT_EQ(run["keyframes_in_map"], 12);
+      EXPECT_EQ(run["disparity_offset_px"], 0.25);
       EXPECT_EQ(run["tracking_failures"], 1);
       EXPECT_EQ(run["frames"], 80);
       EXPECT_EQ(run["pairs"], 80);

@@ -67,7 +67,7 @@ awk -v n=$n -v est=$est -v mode=$mode 'BEGIN {
   printf " \"estimator\": \"%s\", \"mode\": \"%s\", \"options\": {},\n \"frames\": [", est, mode
   for (i = 0; i < n; i++) { t = 10 + i % 10;
     printf "%s{\"frame\": %d, \"t\": %.1f, \"status\": \"%s\", \"keyframe\": %s, \"features\": 500, \"landmarks\": 100, \"ms\": {\"frontend\": %.1f, \"estimator\": %.1f, \"total\": %.1f}}", (i ? ",\n  " : ""), i, i * 0.1, (i == 5 ? "lost" : "tracking"), (i % 5 == 0 ? "true" : "false"), t * 0.6, t * 0.4, t }
-  printf "],\n \"summary\": {\"frames\": %d, \"fps\": 70.0, \"tracking_failures\": 1, \"keyframes\": 16, \"keyframes_in_map\": 12, \"landmarks\": 4321, \"pairs\": %d}}\n", n, n }' > "$out/report.json.tmp"
+  printf "],\n \"summary\": {\"frames\": %d, \"fps\": 70.0, \"tracking_failures\": 1, \"keyframes\": 16, \"keyframes_in_map\": 12, \"disparity_offset_px\": 0.25, \"landmarks\": 4321, \"pairs\": %d}}\n", n, n }' > "$out/report.json.tmp"
 mv "$out/report.json.tmp" "$out/report.json"
 exit 0
 )SCRIPT";
