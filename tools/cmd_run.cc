@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <iostream>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -97,6 +98,11 @@ class Progress {
   bool enabled_, tty_;
 };
 
+// A value, or null when there is none.
+nlohmann::json JsonOrNull(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
 nlohmann::json FrameJson(const FrameStats& s) {
   return {{"frame", s.frame.value},
           {"t", SecondsFromNs(s.t_ns)},
@@ -107,8 +113,7 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"places", s.places},
           {"keyframes_in_map", s.keyframes_in_map},
           // The stereo rig's disparity offset in use (px; null: the estimator has none).
-          {"disparity_offset_px", s.disparity_offset_px ? nlohmann::json(*s.disparity_offset_px)
-                                                        : nlohmann::json(nullptr)},
+          {"disparity_offset_px", JsonOrNull(s.disparity_offset_px)},
           {"features", s.features},
           {"tracked", s.tracked},
           {"landmarks", s.landmarks},
@@ -304,9 +309,7 @@ int RunRun(const std::vector<std::string>& args) {
       // DisparityOffsetNote; empty: none).
       {"disparity_offset", system.estimator().DisparityOffsetNote()},
       // Its value in pixels (null: the estimator has none).
-      {"disparity_offset_px", system.estimator().DisparityOffsetPx()
-                                  ? nlohmann::json(*system.estimator().DisparityOffsetPx())
-                                  : nlohmann::json(nullptr)},
+      {"disparity_offset_px", JsonOrNull(system.estimator().DisparityOffsetPx())},
       {"keyframes", keyframes},
       // Keyframes left in the estimator's map (made minus culled; -1: the estimator keeps none).
       {"keyframes_in_map", keyframes_in_map},
