@@ -33,7 +33,7 @@ bool SlidingWindowBa::Options::IsValid(std::string* why) const {
   };
   if (window_size < 2) return fail("window_size must be >= 2");
   if (num_fixed_keyframes < -1) return fail("num_fixed_keyframes must be >= 0 (or -1 = auto)");
-  if (num_held_keyframes < 0) return fail("num_held_keyframes must be >= 0");
+  if (num_held_keyframes < -1) return fail("num_held_keyframes must be >= 0 (or -1 = auto)");
   if (!(loss_scale > 0.0)) return fail("loss_scale must be > 0");
   if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
   if (!(max_solver_time_in_seconds >= 0.0)) {
@@ -75,6 +75,8 @@ SlidingWindowBa::SlidingWindowBa(const StereoIntrinsics& K, const Options& optio
   CHECK(options_.IsValid(&why)) << "invalid SlidingWindowBa::Options: " << why;
   num_fixed_ =
       options_.num_fixed_keyframes >= 0 ? options_.num_fixed_keyframes : (K_.is_stereo() ? 1 : 2);
+  num_held_ =
+      options_.num_held_keyframes >= 0 ? options_.num_held_keyframes : (K_.is_stereo() ? 0 : 2);
 }
 
 void SlidingWindowBa::SetLandmarkPosition(LandmarkId id, const Eigen::Vector3d& p_w) {
@@ -284,7 +286,7 @@ void SlidingWindowBa::MarginalizeOldest() {
 }
 
 void SlidingWindowBa::Hold(KeyframeState leaving, const std::set<LandmarkId>& consumed) {
-  if (options_.num_held_keyframes == 0) return;
+  if (num_held_ == 0) return;
   auto& obs = leaving.observations;
   obs.erase(std::remove_if(obs.begin(), obs.end(),
                            [&](const BaObservation& o) { return consumed.count(o.landmark) > 0; }),
@@ -292,7 +294,7 @@ void SlidingWindowBa::Hold(KeyframeState leaving, const std::set<LandmarkId>& co
   obs.shrink_to_fit();
   leaving.fixed = true;
   held_.push_back(std::move(leaving));
-  while (static_cast<int>(held_.size()) > options_.num_held_keyframes) held_.pop_front();
+  while (static_cast<int>(held_.size()) > num_held_) held_.pop_front();
 }
 
 std::set<LandmarkId> SlidingWindowBa::BuildProblem(const std::map<LandmarkId, int>& counts,

@@ -35,7 +35,9 @@
 // ApplyCorrection. The held residuals condition on that value (as ORB-SLAM's local BA does)
 // while the prior marginalised the same pose: the information on it is then counted in both,
 // an approximation ORB-SLAM, without a prior, does not make (docs/backend.md measures both
-// settings). Off by default: not better on every sequence (docs/backend.md). A held observation
+// settings). By default 2 with one camera, where the scale lives only in the views (over
+// perturbed KITTI and rendered runs the scale drift is smaller with them: docs/monocular.md),
+// none in stereo, where every keyframe observes the scale. A held observation
 // that fails the outlier test is removed like a window one. A landmark becomes active by its
 // window observations only (min_observations), so holding keyframes changes no activation.
 
@@ -110,8 +112,8 @@ class SlidingWindowBa {
     bool keep_prior = true;
     int num_fixed_keyframes = -1;  // gauge; -1 => 1 for stereo intrinsics, 2 for mono.
     // Keyframes that left the window kept beside it as constants (see the class comment); 0:
-    // none.
-    int num_held_keyframes = 0;
+    // none; -1: 2 for one camera, 0 for stereo intrinsics (docs/monocular.md, "Held keyframes").
+    int num_held_keyframes = -1;
     RobustLoss loss = RobustLoss::kHuber;
     double loss_scale = 2.45;     // on the whitened residual norm; sqrt(5.991), chi2 95% mono.
     int max_num_iterations = 10;  // per solve: the work bound.
@@ -265,6 +267,7 @@ class SlidingWindowBa {
   StereoIntrinsics K_;
   Options options_;
   int num_fixed_ = 1;
+  int num_held_ = 0;  // Options::num_held_keyframes resolved for the intrinsics.
   int num_added_ = 0;
   std::deque<KeyframeState> window_;
   std::deque<KeyframeState> held_;  // left the window, held constant; oldest first.

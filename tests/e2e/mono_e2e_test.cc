@@ -21,9 +21,11 @@ namespace {
 // Runs are bit-identical (deterministic), so no noise margin is added.
 // The rover stretch measured 0.000446 before the homography verified the tracks of a weak
 // essential matrix, which took flight (400 frames) from lost to 0.023 % (docs/monocular.md).
-constexpr double kRoverAteFraction = 0.0020;   // measured 0.00133 (0.0373 m over 28.0 m).
-constexpr double kBlackAteFraction = 0.00087;  // measured 0.000677 (0.000582 before).
-constexpr double kKittiAteMetres = 0.061;      // measured 0.0409 m.
+// 2026-12-03: two held keyframes by default (docs/monocular.md): rover 0.00133 -> 0.00125,
+// black frames 0.000677 -> 0.000805, KITTI 0.0409 -> 0.0334 m, gap 0.0337 -> 0.0276 m.
+constexpr double kRoverAteFraction = 0.0019;   // measured 0.00125 (0.0351 m over 28.0 m).
+constexpr double kBlackAteFraction = 0.0012;   // measured 0.000805 (0.000677 before).
+constexpr double kKittiAteMetres = 0.050;      // measured 0.0334 m.
 constexpr double kStereoBlackAteFraction = 0.00057;  // measured 0.000381 (without: 0.000477).
 
 struct MonoRun {
@@ -134,7 +136,7 @@ TEST(MonoE2e, LongLossStartsANewMapThatContinuesTheTrajectory) {
   for (const StampedPose& p : run.trajectory.poses) {
     EXPECT_FALSE(p.t_ns >= t_100 && p.t_ns < t_180) << "a pose in the gap at " << p.t_ns;
   }
-  EXPECT_LT(r.ate.translation.rmse, 0.038);
+  EXPECT_LT(r.ate.translation.rmse, 0.045);  // measured 0.0298 m.
 }
 
 // A camera turning on the spot gives no parallax: the map never starts, every frame says why,
@@ -273,7 +275,7 @@ GapRun RunSmallLoopGap(const SystemOptions& options) {
   return out;
 }
 
-constexpr double kMonoGapOffsetMetres = 0.051;    // measured 0.0337 m (without: 15.7 m).
+constexpr double kMonoGapOffsetMetres = 0.042;    // measured 0.0276 m (without: 15.7 m).
 constexpr double kStereoGapOffsetMetres = 0.038;  // measured 0.0252 m (without: 24.0 m).
 
 TEST(RelocalisationE2e, MonoReturnsToAMappedPlaceAfterALongLoss) {

@@ -232,6 +232,41 @@ TEST(SlidingWindowBaTest, MonoConvergesWithTwoFixedKeyframes) {
   EXPECT_LT(max_err, 0.03) << s.BriefReport();  // no alignment: the gauge is fixed.
 }
 
+// One camera holds the last two keyframes to leave the window by default (the scale lives only
+// in the views; docs/monocular.md "Held keyframes"), stereo none (previous test).
+TEST(SlidingWindowBaTest, MonoHoldsTheLastTwoKeyframesToLeaveByDefault) {
+  BaSceneOptions so = SmallScene();
+  so.stereo = false;
+  so.num_keyframes = 12;
+  const BaScene scene = MakeBaScene(so);
+  SlidingWindowBa::Options options;
+  options.window_size = 6;
+  options.landmark_exit = SlidingWindowBa::LandmarkExit::kDropSharedObservations;
+  SlidingWindowBa ba(scene.K, options);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 0.05);
+  for (size_t j = 0; j < scene.p_w_gt.size(); ++j) {
+    ba.SetLandmarkPosition(LandmarkId(static_cast<int64_t>(j)),
+                           scene.p_w_gt[j] + Eigen::Vector3d(n(rng), n(rng), n(rng)));
+  }
+  double max_err = 0.0;
+  for (size_t i = 0; i < scene.keyframes.size(); ++i) {
+    BaKeyframe kf = scene.keyframes[i];
+    kf.T_w_c = i < 2 ? scene.T_w_c_gt[i] : PerturbPose(scene.T_w_c_gt[i], rng, 0.01, 0.05);
+    ba.AddKeyframe(kf);
+    const auto s = ba.Optimize();
+    ASSERT_TRUE(s.usable) << s.BriefReport();
+    EXPECT_EQ(s.num_held_keyframes, std::min<int>(2, std::max<int>(0, i + 1 - 6))) << i;
+    for (KeyframeId id : ba.WindowKeyframes()) {
+      max_err = std::max(max_err, (ba.KeyframePose(id)->translation() -
+                                   scene.T_w_c_gt[static_cast<size_t>(id.value)].translation())
+                                      .norm());
+    }
+  }
+  EXPECT_EQ(ba.HeldKeyframes(), (std::vector<KeyframeId>{KeyframeId(4), KeyframeId(5)}));
+  EXPECT_LT(max_err, 0.03);  // No alignment: the first two keyframes hold the gauge.
+}
+
 TEST(SlidingWindowBaTest, GrossOutliersAreRemoved) {
   BaSceneOptions so = SmallScene();
   so.num_keyframes = 12;
@@ -371,7 +406,7 @@ TEST(SlidingWindowBaTest, HeldKeyframesAreTheLastToLeaveAndMoveWithACorrection) 
   // Without the prior (ApplyCorrection drops it) the start cost is the residuals' alone.
   EXPECT_LT(after.initial_cost, 1.5 * before.final_cost) << after.BriefReport();
 
-  // Off by default: nothing is held.
+  // Off by default with stereo intrinsics (the scene's): nothing is held.
   SlidingWindowBa plain(scene.K, SlidingWindowBa::Options());
   RunSequential(scene, SlidingWindowBa::Options(), 7, &plain);
   EXPECT_TRUE(plain.HeldKeyframes().empty());
@@ -399,7 +434,7 @@ TEST(SlidingWindowBaTest, OptionsValidation) {
   o.loss_scale = 0.0;
   EXPECT_FALSE(o.IsValid(&why));
   o = SlidingWindowBa::Options();
-  o.num_held_keyframes = -1;
+  o.num_held_keyframes = -2;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("num_held_keyframes"), std::string::npos);
   o = SlidingWindowBa::Options();
