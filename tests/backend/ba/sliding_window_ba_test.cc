@@ -82,6 +82,25 @@ BaSceneOptions SmallScene() {
   return o;
 }
 
+// One camera, 12 keyframes: the landmarks must be given positions (SeedLandmarks), as the
+// two-view initialisation does in a run.
+BaSceneOptions MonoScene() {
+  BaSceneOptions o = SmallScene();
+  o.stereo = false;
+  o.num_keyframes = 12;
+  return o;
+}
+
+// Every landmark at its true position plus N(0, sigma^2) per axis.
+void SeedLandmarks(const BaScene& scene, double sigma, std::mt19937* rng, SlidingWindowBa* ba) {
+  std::normal_distribution<double> n(0.0, sigma);
+  for (size_t j = 0; j < scene.p_w_gt.size(); ++j) {
+    Eigen::Vector3d noise;
+    for (int k = 0; k < 3; ++k) noise[k] = n(*rng);  // In order (argument order is unspecified).
+    ba->SetLandmarkPosition(LandmarkId(static_cast<int64_t>(j)), scene.p_w_gt[j] + noise);
+  }
+}
+
 std::vector<Pose> ChainedInitialGuess(const BaScene& scene, unsigned seed) {
   const auto T_prev_cur = NoisyRelativeMotions(scene, seed);
   std::vector<Pose> init{scene.T_w_c_gt[0]};
@@ -196,20 +215,13 @@ TEST(SlidingWindowBaTest, TrackFrameAgainstTheWindowMap) {
 }
 
 TEST(SlidingWindowBaTest, MonoConvergesWithTwoFixedKeyframes) {
-  BaSceneOptions so = SmallScene();
-  so.stereo = false;
-  so.num_keyframes = 12;
-  const BaScene scene = MakeBaScene(so);
+  const BaScene scene = MakeBaScene(MonoScene());
   SlidingWindowBa::Options options;
-  options.window_size = so.num_keyframes;
+  options.window_size = static_cast<int>(scene.keyframes.size());
   options.max_num_iterations = 50;
   SlidingWindowBa ba(scene.K, options);
   std::mt19937 rng(11);
-  std::normal_distribution<double> n(0.0, 0.1);
-  for (size_t j = 0; j < scene.p_w_gt.size(); ++j) {
-    ba.SetLandmarkPosition(LandmarkId(static_cast<int64_t>(j)),
-                           scene.p_w_gt[j] + Eigen::Vector3d(n(rng), n(rng), n(rng)));
-  }
+  SeedLandmarks(scene, 0.1, &rng, &ba);
   std::vector<Pose> init;
   for (size_t i = 0; i < scene.keyframes.size(); ++i) {
     BaKeyframe kf = scene.keyframes[i];
@@ -235,20 +247,13 @@ TEST(SlidingWindowBaTest, MonoConvergesWithTwoFixedKeyframes) {
 // One camera holds the last two keyframes to leave the window by default (the scale lives only
 // in the views; docs/monocular.md "Held keyframes"), stereo none (previous test).
 TEST(SlidingWindowBaTest, MonoHoldsTheLastTwoKeyframesToLeaveByDefault) {
-  BaSceneOptions so = SmallScene();
-  so.stereo = false;
-  so.num_keyframes = 12;
-  const BaScene scene = MakeBaScene(so);
+  const BaScene scene = MakeBaScene(MonoScene());
   SlidingWindowBa::Options options;
   options.window_size = 6;
   options.landmark_exit = SlidingWindowBa::LandmarkExit::kDropSharedObservations;
   SlidingWindowBa ba(scene.K, options);
   std::mt19937 rng(5);
-  std::normal_distribution<double> n(0.0, 0.05);
-  for (size_t j = 0; j < scene.p_w_gt.size(); ++j) {
-    ba.SetLandmarkPosition(LandmarkId(static_cast<int64_t>(j)),
-                           scene.p_w_gt[j] + Eigen::Vector3d(n(rng), n(rng), n(rng)));
-  }
+  SeedLandmarks(scene, 0.05, &rng, &ba);
   double max_err = 0.0;
   for (size_t i = 0; i < scene.keyframes.size(); ++i) {
     BaKeyframe kf = scene.keyframes[i];
