@@ -245,7 +245,8 @@ TEST(SlidingWindowBaTest, MonoConvergesWithTwoFixedKeyframes) {
 }
 
 // One camera holds the last two keyframes to leave the window by default (the scale lives only
-// in the views; docs/monocular.md "Held keyframes"), stereo none (previous test).
+// in the views; docs/monocular.md "Held keyframes"); stereo intrinsics hold none (checked at the
+// end of HeldKeyframesAreTheLastToLeaveAndMoveWithACorrection).
 TEST(SlidingWindowBaTest, MonoHoldsTheLastTwoKeyframesToLeaveByDefault) {
   const BaScene scene = MakeBaScene(MonoScene());
   SlidingWindowBa::Options options;
