@@ -47,6 +47,9 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (max_landmark_depth_m < 0) return fail("ba.max_landmark_depth_m must be >= 0 (0: no limit)");
   if (mono_reinit_after_lost_frames < 1)
     return fail("ba.mono_reinit_after_lost_frames must be >= 1");
+  if (refine_frames != "mono" && refine_frames != "always" && refine_frames != "off") {
+    return fail("ba.refine_frames must be mono, always or off");
+  }
   if (final_ba != "after_loop" && final_ba != "always" && final_ba != "off") {
     return fail("ba.final_ba must be after_loop, always or off");
   }
@@ -78,6 +81,9 @@ StereoIntrinsics IntrinsicsOf(const StereoRig& rig, double disparity_offset_px =
   K.disparity_offset_px = disparity_offset_px;
   return K;
 }
+
+// See the class comment, "Frames between keyframes": ~20 KB each (a frame's observations).
+constexpr size_t kMaxWaitingFrames = 200;
 
 BaObservation ToBa(const FeatureObservation& o) {
   BaObservation b;
@@ -386,6 +392,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
     }
     frames_[reference_index + 1 + j] = {f.t_ns, reference,
                                         keyframe_poses_.at(reference).inverse() * r.T_w_c, true};
+    DeferFrameRefinement(reference_index + 1 + j, f);
     T_w_last = r.T_w_c;
   }
   frames_.push_back({init.current.t_ns, current, Pose::Identity(), true});
@@ -552,6 +559,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   // The offset this frame is tracked with; read here, while no window solve runs (one started
   // below may change it in the background: SlidingWindowBa calibrates it).
   const double disparity_offset_px = ba_.disparity_offset_px();
+  RefineWaitingFrames(/*all=*/false);  // Before culling: a culled keyframe left the window.
   CullHeldKeyframes();
   // Lost for long (mono): a frame that relocalises in the old map resumes it; else the new
   // map's initialisation goes on.
@@ -657,6 +665,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   } else {
     const KeyframeId ref(num_keyframes_ - 1);
     frames_.push_back({m.t_ns, ref, KeyframePoseNow(ref).inverse() * T_w_c});
+    if (out.valid) DeferFrameRefinement(frames_.size() - 1, m);
     ReportLandmarks(&out);
   }
   // After lost frames T_w_prev_ is a guess: the last tracked velocity is kept.
@@ -731,8 +740,54 @@ std::string SlidingWindowEstimator::DisparityOffsetNote() const {
   return os.str();
 }
 
+void SlidingWindowEstimator::DeferFrameRefinement(size_t index, const FrameMeasurement& m) {
+  const std::string& when = options_.refine_frames;
+  if (when == "off" || (when == "mono" && rig_.is_stereo())) return;
+  WaitingFrame waiting;
+  waiting.index = index;
+  for (const FeatureObservation& o : m.observations) {
+    if (!unconfirmed_loop_landmarks_.count(o.landmark)) waiting.observations.push_back(ToBa(o));
+  }
+  waiting_frames_.push_back(std::move(waiting));
+  if (waiting_frames_.size() > kMaxWaitingFrames) {
+    // The oldest now, its keyframe still in the window: with the estimates of this moment.
+    RefineFrame(waiting_frames_.front());
+    waiting_frames_.pop_front();
+  }
+}
+
+void SlidingWindowEstimator::RefineWaitingFrames(bool all) {
+  if (waiting_frames_.empty()) return;
+  const std::vector<KeyframeId> ids = ba_.WindowKeyframes();
+  const std::set<KeyframeId> window(ids.begin(), ids.end());
+  // Frames are in time order, and so are their keyframes (culling moves a frame to an older
+  // holder, which has left the window too): the first frame still in the window ends the pass.
+  while (!waiting_frames_.empty()) {
+    if (!all && window.count(frames_.at(waiting_frames_.front().index).reference)) break;
+    RefineFrame(waiting_frames_.front());
+    waiting_frames_.pop_front();
+  }
+}
+
+void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
+  FrameRecord& f = frames_.at(waiting.index);
+  if (!f.has_pose || !f.reference.valid() || !keyframe_poses_.count(f.reference)) return;
+  const Pose T_w_kf = KeyframePoseNow(f.reference);
+  const PoseOnlyResult r = EstimatePoseOnly(
+      IntrinsicsOf(rig_, ba_.disparity_offset_px()), waiting.observations,
+      [&](LandmarkId id) -> std::optional<Eigen::Vector3d> {
+        if (unconfirmed_loop_landmarks_.count(id)) return std::nullopt;
+        const auto it = map_points_.find(id);
+        if (it == map_points_.end()) return std::nullopt;
+        return it->second;
+      },
+      T_w_kf * f.T_kf_c, options_.pose_only);
+  if (r.status == PoseOnlyStatus::kOk) f.T_kf_c = T_w_kf.inverse() * r.T_w_c;
+}
+
 RefinementSummary SlidingWindowEstimator::Refine() {
   WaitForWindowSolve();
+  RefineWaitingFrames(/*all=*/true);  // The frames of the last window's keyframes.
   RefinementSummary out;
   if (options_.final_ba == "off") {
     out.report = "global BA off (ba.final_ba=off)";

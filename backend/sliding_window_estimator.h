@@ -70,6 +70,18 @@
 // local unit (the refined over the old distance to the next keyframe, or the previous one for
 // the last), as after a Sim(3) loop closure.
 //
+// Frames between keyframes (options.refine_frames, default with one camera): a frame that is not
+// a keyframe is tracked once, pose-only against the window's landmarks of that moment, and never
+// enters the window, while the later keyframes still refine those landmarks (a mono landmark
+// starts from two views, often 1-2 degrees apart). Once the frame's keyframe has left the window
+// (and at Refine, for the last ones) the frame is tracked again by the same pose-only solver from
+// its stored pose, on all its observations of landmarks that have an estimate by then, and T_kf_c
+// takes the result. Tracking, keyframes and the map are unchanged; only the frames' own poses move.
+// At most kMaxWaitingFrames wait (a camera that stands still makes no keyframe): beyond, the
+// oldest is refined at once. Measured (docs/monocular.md, "Frames between keyframes"): one camera
+// gains on every KITTI start frame and rendered run; stereo does not (its frames measure depth
+// themselves), so it is off there by default.
+//
 // Culling (options.cull_held_keyframes, default on): a keyframe whose place an older keyframe
 // already holds (the frontend verified the old keyframe's view in it: matcher, PnP and at least
 // loop.place_min_inlier_fraction of the old view's points as inliers; FrameMeasurement::
@@ -88,6 +100,7 @@
 // leave the window: the count is bounded by the places, not by the time spent in them. The gauge
 // keyframes of Refine and of each mono map are never culled.
 
+#include <deque>
 #include <functional>
 #include <map>
 #include <optional>
@@ -163,6 +176,11 @@ struct SlidingWindowEstimatorOptions {
   // Keyframe culling (see the class comment, "Culling"): a keyframe whose place an older
   // keyframe holds (FrameMeasurement::place_held_by) is removed once it has left the window.
   bool cull_held_keyframes = true;
+  // The frames between keyframes are tracked (pose-only) against landmarks that later keyframes
+  // still refine; each is tracked again against the refined landmarks once its keyframe has
+  // left the window (see the class comment, "Frames between keyframes"). "mono" (default): with
+  // one camera only; "always"; "off".
+  std::string refine_frames = "mono";
   MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
   uint64_t recovery_seed = 42;       // Of the mono PnP recovery's RANSAC.
   // One camera: after this many lost frames in a row (PnP recovery failing too: the map is out
@@ -217,6 +235,12 @@ class SlidingWindowEstimator : public Estimator {
     KeyframeId reference;
     Pose T_kf_c = Pose::Identity();
     bool has_pose = true;  // false: lost, or before the mono initialisation (not in trajectory()).
+  };
+  // Frames between keyframes waiting to be tracked again (options_.refine_frames): the index in
+  // frames_ and every observation of the frame (the landmarks mapped since count too).
+  struct WaitingFrame {
+    size_t index = 0;
+    std::vector<BaObservation> observations;
   };
   // Mono: feeds the initializer; on success builds the first two keyframes and localises the
   // frames between them.
@@ -286,6 +310,14 @@ class SlidingWindowEstimator : public Estimator {
   template <typename Node>
   std::vector<std::pair<KeyframeId, KeyframeId>> ConsecutiveEdges(
       const std::map<KeyframeId, Node>& nodes) const;
+  // Frames between keyframes (see the class comment): frames_[index] (tracked from m) waits to
+  // be tracked again, when options_.refine_frames says so for this rig.
+  void DeferFrameRefinement(size_t index, const FrameMeasurement& m);
+  // Tracks again the waiting frames whose keyframe has left the window (all of them: `all`),
+  // against the latest landmark estimates.
+  void RefineWaitingFrames(bool all);
+  // One of them (a frame whose new tracking fails keeps its pose).
+  void RefineFrame(const WaitingFrame& waiting);
   // Blocks until a background window solve has finished (no-op when none is running).
   void WaitForWindowSolve() const { solver_.Wait(); }
 
@@ -293,6 +325,7 @@ class SlidingWindowEstimator : public Estimator {
   SlidingWindowEstimatorOptions options_;
   SlidingWindowBa ba_;
   std::vector<FrameRecord> frames_;
+  std::deque<WaitingFrame> waiting_frames_;  // Oldest first (see DeferFrameRefinement).
   std::map<KeyframeId, Pose> keyframe_poses_;  // Last estimate of every keyframe.
   std::map<LandmarkId, int> landmark_observations_;
   std::map<LandmarkId, Eigen::Vector3d> map_points_;  // Last estimate of every landmark.

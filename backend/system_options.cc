@@ -133,6 +133,7 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "num_fixed_keyframes", &b.ba.num_fixed_keyframes);
   v->Field("ba", "num_held_keyframes", &b.ba.num_held_keyframes);
   v->Field("ba", "cull_held_keyframes", &b.cull_held_keyframes);
+  v->Field("ba", "refine_frames", &b.refine_frames);
   v->Field("ba", "final_ba", &b.final_ba);
   v->Field("ba", "final_ba_all_tracks", &b.final_ba_all_tracks);
   v->Field("ba", "final_ba_max_iterations", &b.global_ba.max_num_iterations);
