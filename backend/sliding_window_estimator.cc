@@ -163,13 +163,22 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
       ba_.SetLandmarkPosition(o->landmark,
                               T_w_c * ((corrected > 0 ? d / corrected : 1.0) * o->p_c0));
     } else {
-      // Mono: the previous keyframe's view of it makes the pair the window triangulates.
-      ba_.AddObservation(last_keyframe_, last_keyframe_observations_.at(o->landmark));
-      if (options_.final_ba != "off" && !options_.final_ba_all_tracks) {
-        observation_archive_.emplace_back(last_keyframe_,
-                                          last_keyframe_observations_.at(o->landmark));
+      // Mono: the previous keyframe's view of it makes the pair the window triangulates, and
+      // the earlier window keyframes that saw the same track add theirs (a longer baseline and
+      // more links between the window's keyframes; see the class comment).
+      std::vector<std::pair<KeyframeId, const BaObservation*>> views;
+      for (const auto& [id, seen] : earlier_keyframe_observations_) {
+        const auto it = seen.find(o->landmark);
+        if (it != seen.end() && ba_.KeyframePose(id)) views.emplace_back(id, &it->second);
       }
-      ++landmark_observations_[o->landmark];
+      views.emplace_back(last_keyframe_, &last_keyframe_observations_.at(o->landmark));
+      for (const auto& [id, view] : views) {
+        ba_.AddObservation(id, *view);
+        if (options_.final_ba != "off" && !options_.final_ba_all_tracks) {
+          observation_archive_.emplace_back(id, *view);
+        }
+        ++landmark_observations_[o->landmark];
+      }
     }
     anchor_.emplace(o->landmark, KeyframeId(num_keyframes_ - 1));
   }
@@ -397,6 +406,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
   }
   frames_.push_back({init.current.t_ns, current, Pose::Identity(), true});
   T_w_prev_ = keyframe_poses_.at(current);
+  RememberLastKeyframe(reference, init.reference);  // Its tracks: views of new landmarks too.
   // The velocity: from the frame before when it was localised, else the mean over the span.
   velocity_ = T_w_last ? T_w_last->inverse() * T_w_prev_
                        : InterpolatePose(Pose::Identity(), T_w_prev_,
@@ -405,6 +415,15 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
 }
 
 void SlidingWindowEstimator::RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m) {
+  // The previous last keyframe's observations join the earlier ones; those of keyframes that
+  // have left the window are forgotten (a new landmark's views must be window keyframes).
+  if (last_keyframe_.valid() && last_keyframe_ != id) {
+    earlier_keyframe_observations_[last_keyframe_] = std::move(last_keyframe_observations_);
+  }
+  for (auto it = earlier_keyframe_observations_.begin();
+       it != earlier_keyframe_observations_.end();) {
+    it = ba_.KeyframePose(it->first) ? std::next(it) : earlier_keyframe_observations_.erase(it);
+  }
   last_keyframe_ = id;
   last_keyframe_observations_.clear();
   for (const FeatureObservation& o : m.observations) {
@@ -452,6 +471,7 @@ void SlidingWindowEstimator::RestartWindow() {
   // The last keyframe left with the old window: its observations can pair with none of the new
   // window's keyframes (mono new landmarks, SelectKeyframeObservations).
   last_keyframe_observations_.clear();
+  earlier_keyframe_observations_.clear();
 }
 
 std::optional<Pose> SlidingWindowEstimator::ResumeOldMap(const FrameMeasurement& m) {

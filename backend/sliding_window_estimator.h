@@ -13,9 +13,12 @@
 //     with the triangulated landmarks, and the frames between them are localised against that
 //     map (pose-only), so they get a pose after all;
 //   - new landmarks at a keyframe: stereo ones come with their triangulated point; mono ones are
-//     chosen among the landmarks the previous keyframe also observed, that observation is added
-//     to the previous keyframe (SlidingWindowBa::AddObservation), and the window triangulates
-//     them (DLT, once the rays meet at min_triangulation_parallax_deg);
+//     chosen among the landmarks the previous keyframe also observed; that observation, and those
+//     of every earlier window keyframe on the same track, are added to their keyframes
+//     (SlidingWindowBa::AddObservation), and the window triangulates them (DLT over every view,
+//     once the rays meet at min_triangulation_parallax_deg). Longest tracks are chosen first, so
+//     a new landmark has often been seen by several window keyframes: all of them take it (a
+//     longer baseline, and each landmark links more keyframes of the window);
 //   - the motion prior: the stereo visual motion is metric; the mono one has no scale, so a mono
 //     frame starts from the constant velocity of the estimator's own last two poses, rotated by
 //     the frontend's essential-matrix rotation when there is one. A mono frame whose pose-only
@@ -368,6 +371,9 @@ class SlidingWindowEstimator : public Estimator {
   bool awaiting_map_ = false;
   KeyframeId last_keyframe_;
   std::map<LandmarkId, BaObservation> last_keyframe_observations_;
+  // Mono: every observation of the other window keyframes (by keyframe), the earlier views a
+  // new landmark takes with the last keyframe's.
+  std::map<KeyframeId, std::map<LandmarkId, BaObservation>> earlier_keyframe_observations_;
   int num_keyframes_ = 0;
   // The keyframe whose window solve ran in the background since the last Add (its solved pose
   // becomes the next frame's starting point).

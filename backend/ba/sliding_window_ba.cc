@@ -4,6 +4,7 @@
 #include <ceres/solver.h>
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -519,6 +520,17 @@ std::vector<KeyframeId> SlidingWindowBa::WindowKeyframes() const {
 std::vector<KeyframeId> SlidingWindowBa::HeldKeyframes() const {
   std::vector<KeyframeId> ids;
   for (const KeyframeState& kf : held_) ids.push_back(kf.id);
+  return ids;
+}
+
+std::vector<KeyframeId> SlidingWindowBa::ObservingKeyframes(LandmarkId id) const {
+  std::vector<KeyframeId> ids;
+  for (const KeyframeState& kf : window_) {
+    const auto& obs = kf.observations;
+    if (std::any_of(obs.begin(), obs.end(), [&](const BaObservation& o) { return o.landmark == id; })) {
+      ids.push_back(kf.id);
+    }
+  }
   return ids;
 }
 

@@ -211,6 +211,8 @@ class SlidingWindowBa {
   // The held keyframes (oldest first; see Options::num_held_keyframes).
   std::vector<KeyframeId> HeldKeyframes() const;
   std::optional<Pose> KeyframePose(KeyframeId id) const;
+  // The window keyframes that hold an observation of the landmark (oldest first).
+  std::vector<KeyframeId> ObservingKeyframes(LandmarkId id) const;
   std::optional<Eigen::Vector3d> LandmarkPosition(LandmarkId id) const;
   // The rig's disparity offset as last estimated (StereoIntrinsics::disparity_offset_px; 0
   // until a window solve estimated it, or when Options::estimate_disparity_offset is off).

@@ -48,7 +48,9 @@ sim::SimOptions Rover(int frames) {
 // and the result is accurate. Bounds: 1.5x the measured ATE (runs are bit-identical).
 // Measured, rover 150 frames: stereo 0.0115 m online, 0.00486 m refined; mono (Sim(3)) 0.0351 m
 // online, 0.0282 m refined (0.0373 / 0.0298 m before the two held mono keyframes; 2026-12-03,
-// frames between keyframes tracked again: mono 0.0344 m online, 0.0275 m refined).
+// frames between keyframes tracked again: mono 0.0344 m online, 0.0275 m refined; stop 21, a
+// new landmark takes every window keyframe's view: 0.0168 m online, 0.0234 m refined, i.e. the
+// global BA is now worse than the window on this run, docs/monocular.md).
 TEST(GlobalBaE2e, RefinesEveryKeyframeStereoAndMono) {
   const sim::SyntheticSequence seq(Rover(150));
   for (const char* mode : {"stereo", "mono"}) {
@@ -70,7 +72,7 @@ TEST(GlobalBaE2e, RefinesEveryKeyframeStereoAndMono) {
     const double refined = Ate(seq, run.refined, alignment);
     std::cout << "[ measured ] " << mode << " rover 150: ATE " << online << " m online, " << refined
               << " m after the global BA (" << run.refinement.report << ")" << std::endl;
-    EXPECT_LT(refined, 1.5 * (std::string(mode) == "mono" ? 0.0275 : 0.00486));
+    EXPECT_LT(refined, 1.5 * (std::string(mode) == "mono" ? 0.0234 : 0.00486));
   }
 }
 

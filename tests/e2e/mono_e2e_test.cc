@@ -26,10 +26,13 @@ namespace {
 // 2026-12-03 (stop 21): frames between keyframes tracked again (ba.refine_frames): rover
 // 0.00125 -> 0.00123, black frames 0.000805 -> 0.000791, KITTI 0.0334 -> 0.0325 m (0.0324 m in
 // `dala run`, which also tracks the last window's frames again at the end), gap 0.0276 ->
-// 0.0272 m, long loss 0.0298 -> 0.0297 m.
-constexpr double kRoverAteFraction = 0.0019;   // measured 0.00123 (0.0344 m over 28.0 m).
-constexpr double kBlackAteFraction = 0.0012;   // measured 0.000791.
-constexpr double kKittiAteMetres = 0.049;      // measured 0.0325 m.
+// 0.0272 m, long loss 0.0298 -> 0.0297 m. Then (stop 21) a new landmark takes every window
+// keyframe's view of its track: rover 0.00123 -> 0.000598, black frames 0.000791 -> 0.000830,
+// KITTI 0.0325 -> 0.0308 m (0.0311 m in `dala run`), gap 0.0272 -> 0.0266 m, long loss 0.0297
+// -> 0.0314 m.
+constexpr double kRoverAteFraction = 0.0009;   // measured 0.000598 (0.0168 m over 28.0 m).
+constexpr double kBlackAteFraction = 0.00125;  // measured 0.000830.
+constexpr double kKittiAteMetres = 0.046;      // measured 0.0308 m.
 constexpr double kStereoBlackAteFraction = 0.00057;  // measured 0.000381 (without: 0.000477).
 
 struct MonoRun {
@@ -111,7 +114,7 @@ TEST(MonoE2e, RoverStretchMonoBa) {
 // keyframes still refine; once their keyframe has left the window they are tracked again
 // (ba.refine_frames, default with one camera). Nothing else changes (the keyframes are the same,
 // to the bit), and those frames come closer to the ground truth. Measured on this preset:
-// Sim(3) ATE 0.0281 -> 0.0225 m (KITTI 06: 0.0334 -> 0.0324 m, docs/monocular.md).
+// Sim(3) ATE 0.0364 -> 0.0319 m (KITTI 06: 0.0318 -> 0.0311 m, docs/monocular.md).
 TEST(MonoE2e, FramesBetweenKeyframesAreTrackedAgainAfterTheirKeyframeLeaves) {
   const sim::SyntheticSequence seq(Preset("flight", 150));
   SystemOptions once = MonoBa();
@@ -184,7 +187,7 @@ TEST(MonoE2e, LongLossStartsANewMapThatContinuesTheTrajectory) {
   for (const StampedPose& p : run.trajectory.poses) {
     EXPECT_FALSE(p.t_ns >= t_100 && p.t_ns < t_180) << "a pose in the gap at " << p.t_ns;
   }
-  EXPECT_LT(r.ate.translation.rmse, 0.045);  // measured 0.0297 m.
+  EXPECT_LT(r.ate.translation.rmse, 0.047);  // measured 0.0314 m.
 }
 
 // A camera turning on the spot gives no parallax: the map never starts, every frame says why,
@@ -323,7 +326,7 @@ GapRun RunSmallLoopGap(const SystemOptions& options) {
   return out;
 }
 
-constexpr double kMonoGapOffsetMetres = 0.041;    // measured 0.0272 m (without: 15.7 m).
+constexpr double kMonoGapOffsetMetres = 0.040;    // measured 0.0266 m (without: 15.7 m).
 constexpr double kStereoGapOffsetMetres = 0.038;  // measured 0.0252 m (without: 24.0 m).
 
 TEST(RelocalisationE2e, MonoReturnsToAMappedPlaceAfterALongLoss) {

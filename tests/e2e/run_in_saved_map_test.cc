@@ -79,9 +79,10 @@ RunB RunInMap(const sim::SyntheticSequence& seq, const SystemOptions& options, c
 // Bounds at 1.5x the measured values (runs are bit-identical). Without the map B would start at
 // the identity, 15 m and more from where A's frame puts frame 60.
 constexpr double kStereoMapErrorMetres = 0.0375;  // measured 0.0250 m (0.5 m aside, 3 deg).
-constexpr double kMonoMapOffsetMetres = 0.043;   // measured 0.0283 m (0.0350 before the held
+constexpr double kMonoMapOffsetMetres = 0.057;   // measured 0.0380 m (0.0350 before the held
                                                  // mono keyframes, 0.0282 m before
-                                                 // ba.refine_frames).
+                                                 // ba.refine_frames, 0.0283 m before new
+                                                 // landmarks took every window view).
 
 TEST(RunInSavedMap, StereoRunContinuesInTheSavedMapsFrame) {
   const sim::SyntheticSequence seq = RoverStretch();

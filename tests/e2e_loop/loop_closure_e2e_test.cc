@@ -162,8 +162,9 @@ TEST(LoopClosureE2e, RevisitStoresNoNewPlacesAndCullsItsKeyframes) {
 
 // One camera: the small loop (500 frames, ~124 m) from the left images. The revisit is
 // recognised and closed over Sim(3) (the current keyframe placed by PnP on the old landmarks,
-// the scale from the recognised landmarks mapped on both sides). Measured: Sim(3) ATE 0.0535 m
-// with the loop (0.0576 m before the held keyframes, 0.0539 m before ba.refine_frames), 0.1006 m without (`loop.ba_correct=0`,
+// the scale from the recognised landmarks mapped on both sides). Measured: Sim(3) ATE 0.0736 m
+// with the loop (0.0576 m before the held keyframes, 0.0539 m before ba.refine_frames, 0.0535 m
+// before new landmarks took every window keyframe's view: small_loop is the preset that loses), 0.1006 m without (`loop.ba_correct=0`,
 // before them); bound 1.5x the first.
 TEST(LoopClosureE2e, MonoSmallLoopIsClosedOverSim3) {
   sim::SimOptions sim;
@@ -178,7 +179,7 @@ TEST(LoopClosureE2e, MonoSmallLoopIsClosedOverSim3) {
             << run.eval.ate.translation.rmse << " m; loops detected " << run.loops_detected
             << ", closed " << run.loops_closed << std::endl;
   EXPECT_GE(run.loops_closed, 1);
-  EXPECT_LT(run.eval.ate.translation.rmse, 1.5 * 0.0535);
+  EXPECT_LT(run.eval.ate.translation.rmse, 1.5 * 0.0736);
 }
 
 // false_loop at 2 Hz, 480x320, up to x = 160 m: the stretch x = 140-160 m is a copy of
