@@ -527,7 +527,8 @@ std::vector<KeyframeId> SlidingWindowBa::ObservingKeyframes(LandmarkId id) const
   std::vector<KeyframeId> ids;
   for (const KeyframeState& kf : window_) {
     const auto& obs = kf.observations;
-    if (std::any_of(obs.begin(), obs.end(), [&](const BaObservation& o) { return o.landmark == id; })) {
+    if (std::any_of(obs.begin(), obs.end(),
+                    [&](const BaObservation& o) { return o.landmark == id; })) {
       ids.push_back(kf.id);
     }
   }

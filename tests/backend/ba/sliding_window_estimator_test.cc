@@ -96,8 +96,7 @@ TEST(SlidingWindowEstimatorTest, NewMonoLandmarksTakeEveryWindowKeyframesView) {
       for (const KeyframeId k : window) {
         if (seen_by[k].count(id)) {
           EXPECT_TRUE(has.count(k)) << "frame " << frame << ": landmark " << id.value
-                                    << " seen by window keyframe " << k.value
-                                    << " lacks that view";
+                                    << " seen by window keyframe " << k.value << " lacks that view";
         }
       }
       ++checked;
