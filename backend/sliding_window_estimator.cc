@@ -50,8 +50,9 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (refine_frames != "mono" && refine_frames != "always" && refine_frames != "off") {
     return fail("ba.refine_frames must be mono, always or off");
   }
-  if (final_ba != "after_loop" && final_ba != "always" && final_ba != "off") {
-    return fail("ba.final_ba must be after_loop, always or off");
+  if (final_ba != "rig_offset" && final_ba != "after_loop" && final_ba != "always" &&
+      final_ba != "off") {
+    return fail("ba.final_ba must be rig_offset, after_loop, always or off");
   }
   if (global_ba.max_num_iterations < 1) return fail("ba.final_ba_max_iterations must be >= 1");
   if (!global_ba.IsValid(why)) return false;
@@ -97,7 +98,11 @@ BaObservation ToBa(const FeatureObservation& o) {
 
 SlidingWindowEstimator::SlidingWindowEstimator(const StereoRig& rig,
                                                const SlidingWindowEstimatorOptions& options)
-    : rig_(rig), options_(options), ba_(IntrinsicsOf(rig), options.ba) {
+    : rig_(rig),
+      options_(options),
+      ba_(IntrinsicsOf(
+              rig, options.ba.calibrate_disparity_offset ? 0.0 : options.ba.disparity_offset_px),
+          options.ba) {
   std::string why;
   CHECK(options_.IsValidFor(rig_, &why)) << why;
   CHECK(!rig_.left.HasDistortion()) << "SlidingWindowEstimator expects rectified images";
@@ -174,7 +179,7 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
       views.emplace_back(last_keyframe_, &last_keyframe_observations_.at(o->landmark));
       for (const auto& [id, view] : views) {
         ba_.AddObservation(id, *view);
-        if (options_.final_ba != "off" && !options_.final_ba_all_tracks) {
+        if (KeepsObservationArchive() && !options_.final_ba_all_tracks) {
           observation_archive_.emplace_back(id, *view);
         }
         ++landmark_observations_[o->landmark];
@@ -435,7 +440,7 @@ void SlidingWindowEstimator::AddToWindow(const BaKeyframe& kf, const FrameMeasur
   ba_.AddKeyframe(kf);
   // What Refine solves, kept only when it will run (~48 B per observation: ~15 MB over the
   // 1,300 keyframes of a 3,000-frame rover run).
-  if (options_.final_ba == "off") {
+  if (!KeepsObservationArchive()) {
     // Nothing kept.
   } else if (options_.final_ba_all_tracks) {
     for (const FeatureObservation& o : m.observations) {
@@ -742,22 +747,46 @@ std::string SlidingWindowEstimator::DisparityOffsetNote() const {
     return os.str();
   }
   if (!o.calibrate_disparity_offset) {
-    os << ", fixed (ba.calibrate_disparity_offset is off)";
+    os << ", fixed (ba.calibrate_disparity_offset is off; ba.disparity_offset_px)";
     return os.str();
   }
   const DisparityOffsetCalibration& c = ba_.offset_calibration();
-  if (ba_.disparity_offset_px() != 0.0) {
-    os << ", calibrated online from " << c.num_estimates() << " windows";
+  if (online_offset_px_) {
+    os << ", estimated with every keyframe by the global BA after the run (online calibration: "
+       << *online_offset_px_ << " px from " << c.num_estimates() << " windows)";
+  } else if (ba_.disparity_offset_px() != 0.0) {
+    os << ", calibrated online from " << c.num_estimates() << " windows (median " << std::showpos
+       << c.median_px() << std::noshowpos << " px, weight " << std::setprecision(2) << c.weight()
+       << ")";
   } else if (c.num_estimates() < o.offset_calibration.min_estimates) {
     os << ": not calibrated, " << c.num_estimates() << " windows with enough motion (needs "
        << o.offset_calibration.min_estimates << ")";
   } else {
-    os << ": the " << c.num_estimates() << " windows estimated " << std::showpos << c.mean_px()
-       << std::noshowpos << " px on average, within what an exact rig shows (+-"
-       << o.offset_calibration.min_offset_px << " px): none applied";
+    os << ": the " << c.num_estimates() << " windows' median estimate " << std::showpos
+       << c.median_px() << std::noshowpos
+       << " px is within what an exact rig shows (|median| <= " << o.offset_calibration.bias_px
+       << " px): none applied";
   }
   if (!c.converged() && c.num_estimates() > 0) os << " (still calibrating)";
+  if (ba_.disparity_offset_px() != 0.0) {
+    // In the form that gives it to a later run of the same rig.
+    os << "; for later runs of this rig: --set ba.calibrate_disparity_offset=0 --set "
+          "ba.disparity_offset_px="
+       << std::setprecision(3) << ba_.disparity_offset_px();
+  }
   return os.str();
+}
+
+bool SlidingWindowEstimator::KeepsObservationArchive() const {
+  if (options_.final_ba == "off") return false;
+  if (options_.final_ba != "rig_offset") return true;
+  return rig_.is_stereo() && options_.ba.calibrate_disparity_offset &&
+         !options_.ba.estimate_disparity_offset;
+}
+
+bool SlidingWindowEstimator::RigOffsetCalibrated() const {
+  return rig_.is_stereo() && options_.ba.calibrate_disparity_offset &&
+         !options_.ba.estimate_disparity_offset && ba_.disparity_offset_px() != 0.0;
 }
 
 void SlidingWindowEstimator::DeferFrameRefinement(size_t index, const FrameMeasurement& m) {
@@ -817,6 +846,15 @@ RefinementSummary SlidingWindowEstimator::Refine() {
     out.report = "global BA not run: no loop was closed (ba.final_ba=always runs it anyway)";
     return out;
   }
+  const bool offset_found = RigOffsetCalibrated();
+  if (options_.final_ba == "rig_offset" && !offset_found) {
+    out.report = rig_.is_stereo()
+                     ? "global BA not run: no disparity offset was calibrated for the rig "
+                       "(ba.final_ba=always runs it anyway)"
+                     : "global BA not run: one camera has no disparity offset "
+                       "(ba.final_ba=always runs it anyway)";
+    return out;
+  }
   if (keyframe_poses_.size() < 2) {
     out.report = "global BA: fewer than two keyframes, nothing to refine";
     return out;
@@ -830,8 +868,13 @@ RefinementSummary SlidingWindowEstimator::Refine() {
   }
   problem.landmarks = map_points_;
   problem.observations = observation_archive_;
+  // A rig whose offset was calibrated online: the global BA estimates it again with every
+  // keyframe (those made before the calibration knew it were solved without it).
+  GlobalBaOptions global_ba = options_.global_ba;
+  global_ba.estimate_disparity_offset = offset_found;
+  global_ba.disparity_offset_prior_sigma_px = options_.ba.disparity_offset_prior_sigma_px;
   const GlobalBaSummary s =
-      SolveGlobalBa(IntrinsicsOf(rig_, ba_.disparity_offset_px()), options_.global_ba, &problem);
+      SolveGlobalBa(IntrinsicsOf(rig_, ba_.disparity_offset_px()), global_ba, &problem);
   out.report = s.BriefReport();
   out.keyframes = s.num_keyframes;
   out.landmarks = s.num_landmarks;
@@ -845,6 +888,10 @@ RefinementSummary SlidingWindowEstimator::Refine() {
     return out;
   }
   out.done = true;
+  if (offset_found) {
+    online_offset_px_ = ba_.disparity_offset_px();
+    ba_.set_disparity_offset_px(s.disparity_offset_px);
+  }
   // Mono: each keyframe's change of local unit, from its distance to the next keyframe (the
   // previous one for the last); the frames stored relative to it are scaled by it.
   std::map<KeyframeId, double> unit_change;

@@ -190,12 +190,16 @@ struct SlidingWindowEstimatorOptions {
   // of view), a new map is initialised and placed where the old one would continue.
   int mono_reinit_after_lost_frames = 10;
   // Refine() (System::Finish, `dala run` after the last frame): the global BA over every
-  // keyframe (backend/ba/global_ba.h). When: "off", "always", or "after_loop" (a run that
+  // keyframe (backend/ba/global_ba.h). When: "off", "always", "after_loop" (a run that
   // closed a loop: the pose graph moved the keyframes with an approximate model, and the global
   // BA spreads the loop's correction over every observation, as ORB-SLAM's global BA after a
-  // loop does). Off by default: on the rendered and KITTI runs it is better on some and worse
-  // on others, loops or not (docs/backend.md, "Global BA after the run").
-  std::string final_ba = "off";
+  // loop does), or "rig_offset" (a stereo rig whose disparity offset the online calibration
+  // found non-zero: the keyframes that left the window before the offset was known kept the
+  // scale error it causes, and the global BA re-solves every keyframe with the offset free).
+  // Not "always": on exact rendered rigs and KITTI it is better on some runs and worse on
+  // others (docs/backend.md, "Global BA after the run"); whenever it runs on a rig with a
+  // calibrated offset, the offset is free in it.
+  std::string final_ba = "rig_offset";
   // What the global BA solves: every track of every keyframe (the frontend's observations,
   // those the window never mapped triangulated first), or only what the window was given.
   bool final_ba_all_tracks = true;
@@ -323,6 +327,11 @@ class SlidingWindowEstimator : public Estimator {
   void RefineFrame(const WaitingFrame& waiting);
   // Blocks until a background window solve has finished (no-op when none is running).
   void WaitForWindowSolve() const { solver_.Wait(); }
+  // Refine will need observation_archive_ (options_.final_ba; "rig_offset": a stereo rig whose
+  // offset is calibrated online, which only the end of the run can tell is non-zero).
+  bool KeepsObservationArchive() const;
+  // A stereo rig whose disparity offset the online calibration set to a non-zero value.
+  bool RigOffsetCalibrated() const;
 
   StereoRig rig_;
   SlidingWindowEstimatorOptions options_;
@@ -342,7 +351,9 @@ class SlidingWindowEstimator : public Estimator {
   std::vector<PoseGraphEdge> loop_edges_;
   int loops_closed_ = 0;
   std::map<KeyframeId, KeyframeId> merged_into_;  // Culled keyframe -> its holder.
-  // For Refine (kept only when options_.final_ba is not "off"): every observation given to the
+  // The offset the online calibration had found, when Refine re-estimated it.
+  std::optional<double> online_offset_px_;
+  // For Refine (kept only when KeepsObservationArchive()): every observation given to the
   // window, or every track of each keyframe (final_ba_all_tracks), as (keyframe, observation);
   // and the keyframes each window held as its gauge (the first one or two after each restart).
   std::vector<std::pair<KeyframeId, BaObservation>> observation_archive_;

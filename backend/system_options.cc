@@ -175,11 +175,11 @@ void VisitOptions(SystemOptions* o, OptionVisitor* v) {
   v->Field("ba", "estimate_disparity_offset", &b.ba.estimate_disparity_offset);
   v->Field("ba", "disparity_offset_prior_sigma_px", &b.ba.disparity_offset_prior_sigma_px);
   v->Field("ba", "calibrate_disparity_offset", &b.ba.calibrate_disparity_offset);
+  v->Field("ba", "disparity_offset_px", &b.ba.disparity_offset_px);
   // The calibration's tests (backend/ba/disparity_offset_calibration.h).
   DisparityOffsetCalibration::Options& oc = b.ba.offset_calibration;
   v->Field("ba", "offset_calibration_min_estimates", &oc.min_estimates);
-  v->Field("ba", "offset_calibration_min_offset_px", &oc.min_offset_px);
-  v->Field("ba", "offset_calibration_min_mean_over_sd", &oc.min_mean_over_sd);
+  v->Field("ba", "offset_calibration_bias_px", &oc.bias_px);
   v->Field("ba", "offset_calibration_converged_after_estimates", &oc.converged_after_estimates);
   v->Field("ba", "offset_calibration_stable_px", &oc.stable_px);
   v->Field("ba", "offset_calibration_min_window_span_baselines", &oc.min_window_span_baselines);
@@ -258,6 +258,35 @@ class YamlReader : public OptionVisitor {
 
 std::string Qualified(const std::string& section, const std::string& key) {
   return section.empty() ? key : section + "." + key;
+}
+
+// Keys that existed and were removed: a file or --set that still uses one gets an error that
+// says what replaced it, not only "unknown key".
+const std::map<std::string, std::string>& RemovedKeys() {
+  static const std::map<std::string, std::string> removed = {
+      {"ba.offset_calibration_min_offset_px",
+       "replaced by ba.offset_calibration_bias_px (the offset is weighted from 0 at the bias to "
+       "1 at twice it, not gated; backend/ba/disparity_offset_calibration.h)"},
+      {"ba.offset_calibration_min_mean_over_sd",
+       "removed: the calibration uses the median of the window estimates, which a few wild "
+       "windows do not move, instead of a test against their standard deviation"},
+  };
+  return removed;
+}
+
+[[noreturn]] void ThrowRemovedKey(const std::string& where, const std::string& key) {
+  throw Error() << where << key << ": this option no longer exists; " << RemovedKeys().at(key);
+}
+
+// Throws for the first removed key a YAML file sets.
+void RejectRemovedKeys(const ConfigNode& root, const std::string& path) {
+  for (const auto& [key, note] : RemovedKeys()) {
+    const size_t dot = key.find('.');
+    const std::string section = key.substr(0, dot), name = key.substr(dot + 1);
+    if (root.Has(section.c_str()) && root.Child(section.c_str()).Has(name.c_str())) {
+      ThrowRemovedKey(path + ": ", key);
+    }
+  }
 }
 
 // Applies one "section.key=value".
@@ -358,6 +387,7 @@ class JsonWriter : public OptionVisitor {
 
 void LoadSystemOptions(const std::string& yaml_path, SystemOptions* options) {
   const ConfigNode root = LoadConfigFile(yaml_path);
+  RejectRemovedKeys(root, yaml_path);
   YamlReader reader(root);
   VisitOptions(options, &reader);
   reader.Check();
@@ -373,6 +403,8 @@ void SetSystemOption(const std::string& assignment, SystemOptions* options) {
   Setter setter(assignment.substr(0, eq), assignment.substr(eq + 1));
   VisitOptions(options, &setter);
   if (!setter.found()) {
+    const std::string key = assignment.substr(0, eq);
+    if (RemovedKeys().count(key)) ThrowRemovedKey("--set ", key);
     throw Error() << "--set: unknown option '" << assignment.substr(0, eq)
                   << "'; known options: " << setter.known();
   }

@@ -246,7 +246,8 @@ int RunRun(const std::vector<std::string>& args) {
   if (signal != 0) {
     refinement.report = "not run: the run was interrupted";
   } else {
-    // The BA estimator's global bundle adjustment (ba.final_ba: after_loop, always, off).
+    // The BA estimator's global bundle adjustment (ba.final_ba: rig_offset, after_loop, always,
+    // off).
     refinement = system.Finish();
     if (options.estimator == "ba") {
       std::cerr << "[run] " << refinement.report;
@@ -482,35 +483,34 @@ int RunRun(const std::vector<std::string>& args) {
   return 0;
 }
 
-const CommandRegistrar kRegistrar({
-    "run",
-    "reconstruct the camera trajectory and a map from a dataset folder",
-    "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
-    "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
-    "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-    "         [--map FILE] [--dump_config]\n\n"
-    "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
-    "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
-    "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
-    "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
-    "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"
-    "ground truth), trajectory.png (estimate over ground truth) and memory.png (keyframes\n"
-    "and resident memory against frames; report.json has each frame's rss_mb).\n\n"
-    "--set ba.final_ba=always (or after_loop: when the run closed a loop) refines the whole run\n"
-    "after its last frame by a global bundle adjustment over every keyframe (BA estimator; off\n"
-    "by default, docs/backend.md): trajectory.txt is then the refined trajectory,\n"
-    "trajectory_online.txt the one before (each frame as estimated while the run went on), and\n"
-    "report.json evaluates both (summary.ate, summary.online.ate).\n\n"
-    "A frame whose image is missing, unreadable or of the wrong size is skipped with a warning\n"
-    "and reported lost, without a pose (--strict: exit 2 instead); the first frame must be\n"
-    "readable. Ctrl-C (SIGINT) or SIGTERM stops after the current frame: the results of the\n"
-    "frames done are written as usual, report.json says interrupted, exit status 128 + signal.\n\n"
-    "--map FILE starts in the map.dmap of an earlier run (same camera and options; a stereo run\n"
-    "needs a stereo map): each frame is relocalised against the map's keyframes until one is\n"
-    "placed (frames before have no pose), then the run continues in the map's frame and unit;\n"
-    "report.json's summary.saved_map.localised_at_frame says where (ba estimator only).",
-    &RunRun,
-    __FILE__});
+const CommandRegistrar kRegistrar(
+    {"run", "reconstruct the camera trajectory and a map from a dataset folder",
+     "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
+     "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
+     "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
+     "         [--map FILE] [--dump_config]\n\n"
+     "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
+     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
+     "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
+     "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
+     "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"
+     "ground truth), trajectory.png (estimate over ground truth) and memory.png (keyframes\n"
+     "and resident memory against frames; report.json has each frame's rss_mb).\n\n"
+     "--set ba.final_ba=always (or after_loop: when the run closed a loop) refines the whole run\n"
+     "after its last frame by a global bundle adjustment over every keyframe (BA estimator; by\n"
+     "default only for a stereo rig whose disparity offset was calibrated, with the offset free:\n"
+     "rig_offset; docs/backend.md): trajectory.txt is then the refined trajectory,\n"
+     "trajectory_online.txt the one before (each frame as estimated while the run went on), and\n"
+     "report.json evaluates both (summary.ate, summary.online.ate).\n\n"
+     "A frame whose image is missing, unreadable or of the wrong size is skipped with a warning\n"
+     "and reported lost, without a pose (--strict: exit 2 instead); the first frame must be\n"
+     "readable. Ctrl-C (SIGINT) or SIGTERM stops after the current frame: the results of the\n"
+     "frames done are written as usual, report.json says interrupted, exit status 128 + signal.\n\n"
+     "--map FILE starts in the map.dmap of an earlier run (same camera and options; a stereo run\n"
+     "needs a stereo map): each frame is relocalised against the map's keyframes until one is\n"
+     "placed (frames before have no pose), then the run continues in the map's frame and unit;\n"
+     "report.json's summary.saved_map.localised_at_frame says where (ba estimator only).",
+     &RunRun, __FILE__});
 
 }  // namespace
 }  // namespace dala

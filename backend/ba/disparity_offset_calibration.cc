@@ -11,8 +11,7 @@ bool DisparityOffsetCalibration::Options::IsValid(std::string* why) const {
     return false;
   };
   if (min_estimates < 2) return fail("offset_calibration_min_estimates must be >= 2");
-  if (!(min_offset_px >= 0.0)) return fail("offset_calibration_min_offset_px must be >= 0");
-  if (!(min_mean_over_sd >= 0.0)) return fail("offset_calibration_min_mean_over_sd must be >= 0");
+  if (!(bias_px > 0.0)) return fail("offset_calibration_bias_px must be > 0");
   if (converged_after_estimates < min_estimates) {
     return fail(
         "offset_calibration_converged_after_estimates must be >= "
@@ -31,21 +30,22 @@ bool DisparityOffsetCalibration::Options::IsValid(std::string* why) const {
 void DisparityOffsetCalibration::Add(double estimate_px) {
   if (converged_ || !std::isfinite(estimate_px)) return;
   ++n_;
-  sum_ += estimate_px;
-  sum_sq_ += estimate_px * estimate_px;
+  estimates_.push_back(estimate_px);
+  std::vector<double> sorted = estimates_;
+  std::sort(sorted.begin(), sorted.end());
+  const size_t k = sorted.size() / 2;
+  median_px_ = sorted.size() % 2 == 1 ? sorted[k] : 0.5 * (sorted[k - 1] + sorted[k]);
   if (n_ < options_.min_estimates) return;
-  const double mean = sum_ / n_;
-  const double sd = std::sqrt(std::max(0.0, sum_sq_ / n_ - mean * mean));
-  const bool beyond_bias = std::abs(mean) >= options_.min_offset_px;
-  const bool agreed = std::abs(mean) >= options_.min_mean_over_sd * sd;
-  if (beyond_bias && agreed) {
-    offset_px_ = mean;
+  const double b = options_.bias_px;
+  const double weight = std::clamp((std::abs(median_px_) - b) / b, 0.0, 1.0);
+  offset_px_ = weight > 0.0 ? weight * median_px_ : 0.0;  // not -0.0
+  recent_medians_.push_back(median_px_);
+  if (static_cast<int>(recent_medians_.size()) > options_.min_estimates) {
+    recent_medians_.pop_front();
   }
-  recent_means_.push_back(mean);
-  if (static_cast<int>(recent_means_.size()) > options_.min_estimates) recent_means_.pop_front();
   converged_ = n_ >= options_.converged_after_estimates &&
-               static_cast<int>(recent_means_.size()) == options_.min_estimates &&
-               std::abs(recent_means_.back() - recent_means_.front()) <= options_.stable_px;
+               static_cast<int>(recent_medians_.size()) == options_.min_estimates &&
+               std::abs(recent_medians_.back() - recent_medians_.front()) <= options_.stable_px;
 }
 
 }  // namespace dala

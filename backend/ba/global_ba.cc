@@ -28,6 +28,9 @@ bool GlobalBaOptions::IsValid(std::string* why) const {
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (!(min_disparity_px > 0.0)) return fail("min_disparity_px must be > 0");
   if (!(min_parallax_deg >= 0.0)) return fail("min_parallax_deg must be >= 0");
+  if (!(disparity_offset_prior_sigma_px > 0.0)) {
+    return fail("disparity_offset_prior_sigma_px must be > 0");
+  }
   return true;
 }
 
@@ -37,7 +40,7 @@ std::string GlobalBaSummary::BriefReport() const {
      << num_triangulated << " triangulated here), " << num_observations << " observations, "
      << num_outliers_removed << " outliers removed, " << num_solves << " solves / "
      << num_iterations << " iterations, cost " << initial_cost << " -> " << final_cost
-     << (usable ? "" : " (NOT usable)");
+     << ", disparity offset " << disparity_offset_px << " px" << (usable ? "" : " (NOT usable)");
   return os.str();
 }
 
@@ -108,8 +111,13 @@ std::map<LandmarkId, Eigen::Vector3d> TriangulateUnmapped(const StereoIntrinsics
 
 }  // namespace
 
-GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K, const GlobalBaOptions& options,
+GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K_in, const GlobalBaOptions& options,
                               GlobalBaProblem* problem) {
+  // K's disparity offset follows the estimate (Options::estimate_disparity_offset) from one
+  // solve to the next, so that the outlier test judges each residual under it.
+  StereoIntrinsics K = K_in;
+  const bool estimate_offset = options.estimate_disparity_offset && K.is_stereo();
+  double offset = K.disparity_offset_px;
   std::string why;
   CHECK(options.IsValid(&why)) << "invalid GlobalBaOptions: " << why;
   const auto t0 = std::chrono::steady_clock::now();
@@ -156,8 +164,13 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K, const GlobalBaOptions& 
         if (problem->held.count(kf)) ceres_problem.SetParameterBlockConstant(x_kf);
       }
       used_landmarks.insert(obs.landmark);
-      ceres_problem.AddResidualBlock(CreateReprojectionCost(K, obs), loss.get(), x_kf,
-                                     p.at(obs.landmark).data());
+      if (estimate_offset && obs.u_right) {
+        ceres_problem.AddResidualBlock(CreateStereoOffsetCost(K, obs), loss.get(), x_kf,
+                                       p.at(obs.landmark).data(), &offset);
+      } else {
+        ceres_problem.AddResidualBlock(CreateReprojectionCost(K, obs), loss.get(), x_kf,
+                                       p.at(obs.landmark).data());
+      }
     }
     last_used_landmarks = used_landmarks;
     if (round == 0) {
@@ -167,6 +180,10 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K, const GlobalBaOptions& 
       summary.num_observations = ceres_problem.NumResidualBlocks();
     }
     if (ceres_problem.NumResidualBlocks() == 0) break;
+    if (ceres_problem.HasParameterBlock(&offset)) {
+      ceres_problem.AddResidualBlock(CreateOffsetPriorCost(options.disparity_offset_prior_sigma_px),
+                                     nullptr, &offset);
+    }
     for (const GlobalBaProblem::FixedDistance& f : problem->fixed_distances) {
       if (used_keyframes.count(f.a) && used_keyframes.count(f.b) && f.distance > 0.0) {
         ceres_problem.AddResidualBlock(new DistanceCost(f.distance), nullptr, x.at(f.a).data(),
@@ -191,6 +208,7 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K, const GlobalBaOptions& 
     summary.final_cost = ceres_summary.final_cost;
     summary.usable = ceres_summary.IsSolutionUsable();
     if (!summary.usable) break;
+    K.disparity_offset_px = offset;
 
     // The chi-square test on every residual at the solution.
     int removed = 0;
@@ -226,6 +244,7 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K, const GlobalBaOptions& 
     }
     problem->landmarks = std::move(p);
   }
+  summary.disparity_offset_px = summary.usable ? K.disparity_offset_px : K_in.disparity_offset_px;
   summary.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

@@ -51,6 +51,13 @@ struct GlobalBaOptions {
   bool triangulate_unmapped = true;
   double min_disparity_px = 1.0;
   double min_parallax_deg = 1.0;
+  // Stereo: the rig's disparity offset (StereoIntrinsics::disparity_offset_px) is one more
+  // parameter, shared by every stereo residual, starting from K's value, with the prior
+  // N(0, disparity_offset_prior_sigma_px^2) (the window's, SlidingWindowBa::Options). Every
+  // keyframe is then solved under the offset that the whole run's views agree on, including
+  // the keyframes that left the window before the online calibration knew it.
+  bool estimate_disparity_offset = false;
+  double disparity_offset_prior_sigma_px = 1.0;
 
   bool IsValid(std::string* why) const;
 };
@@ -84,6 +91,9 @@ struct GlobalBaSummary {
   int num_iterations = 0;
   double initial_cost = 0.0;  // Ceres cost 0.5 sum rho(|r|^2): first solve's start...
   double final_cost = 0.0;    // ...and last solve's end.
+  // The disparity offset of the solution (pixels): estimated (Options::estimate_disparity_offset
+  // and a stereo residual) or K's.
+  double disparity_offset_px = 0.0;
   double time_s = 0.0;
   bool usable = false;  // The last solve's IsSolutionUsable (false: nothing was changed).
 

@@ -45,6 +45,9 @@ bool SlidingWindowBa::Options::IsValid(std::string* why) const {
   if (max_outlier_rounds < 0) return fail("max_outlier_rounds must be >= 0");
   if (!(disparity_offset_prior_sigma_px > 0.0))
     return fail("disparity_offset_prior_sigma_px must be > 0");
+  if (!std::isfinite(disparity_offset_px) || std::abs(disparity_offset_px) > 10.0) {
+    return fail("disparity_offset_px must be within +-10 px (a rig's rectification error)");
+  }
   if (!offset_calibration.IsValid(why)) return false;
   if (min_observations < 1) return fail("min_observations must be >= 1");
   if (!(min_disparity_px > 0.0)) return fail("min_disparity_px must be > 0");

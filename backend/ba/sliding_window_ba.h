@@ -139,6 +139,10 @@ class SlidingWindowBa {
     // it. The rig's offset becomes the calibrated value when the estimates agree on one
     // (0 until then, and on a rig whose estimates centre on 0).
     bool calibrate_disparity_offset = true;
+    // The rig's offset when it is known (a previous run's result, which `dala run` prints in
+    // this form): used from the first frame when calibrate_disparity_offset is off (and the
+    // start of the per-window estimate with estimate_disparity_offset).
+    double disparity_offset_px = 0.0;
     DisparityOffsetCalibration::Options offset_calibration;
     int num_threads = 1;            // > 1 may change the result in the last bits.
     bool remove_outliers = true;    // chi-square 95% test after each solve, then re-solve.
@@ -217,6 +221,8 @@ class SlidingWindowBa {
   // The rig's disparity offset as last estimated (StereoIntrinsics::disparity_offset_px; 0
   // until a window solve estimated it, or when Options::estimate_disparity_offset is off).
   double disparity_offset_px() const { return K_.disparity_offset_px; }
+  // Replaces the rig's offset (after a global BA estimated it with every keyframe).
+  void set_disparity_offset_px(double offset_px) { K_.disparity_offset_px = offset_px; }
   // The rig's disparity-offset calibration (Options::calibrate_disparity_offset), handed from
   // a window to the one that replaces it: the offset is the rig's, not the window's.
   const DisparityOffsetCalibration& offset_calibration() const { return offset_calibration_; }

@@ -1,11 +1,12 @@
 // The estimators on real images: `dala run` (the binary) over KITTI 06 frames 0-50.
-// - The stereo BA with the KITTI options (configs/kitti.yaml: the defaults since 2026-12-03:
-//   the rig's disparity offset calibrated online, 0.255 px; the guided search of the window's
-//   landmarks turns itself on, the car's tracks break; no depth limit; a keyframe every 2.5
-//   stereo baselines, 1.34 m: 28 keyframes). Documented in docs/results.md: ATE 0.0230 m
-//   (SE(3)), RPE over one frame 0.0131 m, every frame tracked. Bounds 1.5x; without the offset
-//   calibration the same run gives 0.182 m, with the offset estimated in every window instead
-//   0.0266 m.
+// - The stereo BA with the KITTI options (configs/kitti.yaml, the defaults: the rig's disparity
+//   offset calibrated online and every keyframe re-solved with it after the run; the guided
+//   search of the window's landmarks turns itself on, the car's tracks break; no depth limit; a
+//   keyframe every 2.5 stereo baselines, 1.34 m: 28 keyframes). Bounds 1.5x the best values
+//   docs/results.md records from frame 0: ATE 0.0230 m (SE(3)), RPE over one frame 0.0125 m,
+//   every frame tracked; without the offset calibration the same run gives 0.165 m.
+// - The same from start frames 0..9 (a user's run starts anywhere): best recorded distribution
+//   median 0.0253 m, worst 0.0383 m (docs/results.md); bounds 1.5x each.
 // - The stereo EKF (the paper's filter): ATE 0.1956 m, RPE 0.0174 m; bounds 1.5x.
 // - The mono EKF from the left images only (constant velocity, no odometry): Sim(3) ATE
 //   0.474 m, RPE 0.114 m (Sim(3)-scaled); the ATE bound is the target, 0.5 m (1.5x
@@ -13,11 +14,12 @@
 // The path (60 m) is shorter than KITTI's shortest segment (100 m): no segment errors here.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "tests/test_util.h"
 
@@ -48,9 +50,29 @@ TEST(KittiStereoE2e, AteWithinOnePointFiveTimesTheDocumentedValue) {
   EXPECT_EQ(s["tracking_failures"].get<int>(), 0);
   EXPECT_EQ(s["frames_with_pose"].get<int>(), 51);
   EXPECT_LT(ate, 1.5 * 0.0230);
-  EXPECT_LT(s["rpe"]["trans_rmse"].get<double>(), 1.5 * 0.0131);
-  EXPECT_NE(s["disparity_offset"].get<std::string>().find("calibrated online"), std::string::npos)
+  EXPECT_LT(s["rpe"]["trans_rmse"].get<double>(), 1.5 * 0.0125);
+  EXPECT_NE(s["disparity_offset"].get<std::string>().find(
+                "estimated with every keyframe by the global BA"),
+            std::string::npos)
       << s["disparity_offset"];
+}
+
+TEST(KittiStereoE2e, EveryStartFrameWithinOnePointFiveTimesTheDocumentedSpread) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+  std::vector<double> ates;
+  for (int start = 0; start < 10; ++start) {
+    const std::string out = ::testing::TempDir() + "/dala_kitti_start" + std::to_string(start);
+    const nlohmann::json report = RunKitti("--first_frame " + std::to_string(start), out);
+    ASSERT_FALSE(report.is_discarded()) << "no report.json in " << out;
+    const double ate = report["summary"]["ate"]["rmse"].get<double>();
+    std::cout << "[ measured ] start " << start << ": ATE " << ate << " m" << std::endl;
+    EXPECT_LT(ate, 1.5 * 0.0383) << "start frame " << start;
+    ates.push_back(ate);
+  }
+  std::sort(ates.begin(), ates.end());
+  const double median = 0.5 * (ates[4] + ates[5]);
+  std::cout << "[ measured ] median " << median << " m, worst " << ates.back() << " m" << std::endl;
+  EXPECT_LT(median, 1.5 * 0.0253);
 }
 
 TEST(KittiStereoE2e, StereoEkfWithinOnePointFiveTimesTheDocumentedValue) {

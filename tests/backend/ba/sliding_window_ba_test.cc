@@ -366,7 +366,7 @@ TEST(SlidingWindowBaTest, CalibrationLeavesAnExactRigAlone) {
   SlidingWindowBa on(scene.K, options);
   const std::vector<Pose> poses_on = RunSequential(scene, options, 7, &on);
   std::cout << "[ measured ] exact rig: " << on.offset_calibration().num_estimates()
-            << " estimates, mean " << on.offset_calibration().mean_px() << " px" << std::endl;
+            << " estimates, median " << on.offset_calibration().median_px() << " px" << std::endl;
   EXPECT_GE(on.offset_calibration().num_estimates(), 8);
   EXPECT_EQ(on.disparity_offset_px(), 0.0);
   ASSERT_EQ(poses_on.size(), poses_off.size());
