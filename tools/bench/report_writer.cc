@@ -261,6 +261,13 @@ const std::vector<SpreadColumn>& SpreadColumns() {
   return columns;
 }
 
+// Names rather than numbers: left-aligned.
+bool IsTextColumn(const SpreadColumn& c) {
+  const std::string key = c.key;
+  return key == "sequence" || key == "config" || key.find("variant") != std::string::npos ||
+         key == "not_ok_runs";
+}
+
 const char* kSpreadTitle = "ATE RMSE over the runs of each sequence and configuration";
 const char* kSpreadNote =
     "One row per sequence and configuration, over its runs (one per seed or start frame; "
@@ -270,8 +277,8 @@ const char* kSpreadNote =
 std::string MarkdownSpread(const std::vector<BenchRunResult>& rows) {
   std::string md = "\n## " + std::string(kSpreadTitle) + "\n\n" + kSpreadNote + "\n\n|";
   for (const SpreadColumn& c : SpreadColumns()) md += " " + std::string(c.title) + " |";
-  md += "\n|---|---|";
-  for (size_t i = 2; i < SpreadColumns().size(); ++i) md += "---:|";
+  md += "\n|";
+  for (const SpreadColumn& c : SpreadColumns()) md += IsTextColumn(c) ? "---|" : "---:|";
   md += "\n";
   for (const SpreadSummary& s : SummarizeAte(rows)) {
     md += "|";
@@ -646,7 +653,7 @@ void DrawSpread(const Grid& g, const std::string& s, const std::string& png) {
       median.y.insert(median.y.end(), {*m, *m});
     }
   }
-  dots.push_back(median);
+  dots.insert(dots.begin(), median);  // First, so that the dots are drawn over the bar.
   o.title = s + ": ATE RMSE of every run (dots) and the median (bar)";
   o.x_label = "configuration";
   o.y_label = "ATE RMSE [m]";
