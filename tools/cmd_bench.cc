@@ -26,6 +26,10 @@ DEFINE_string(dala, "",
 DEFINE_string(dataset, "",
               "bench: a dataset folder to add to the suite's sequences (repeatable: "
               "--dataset A --dataset B)");
+DEFINE_string(starts, "",
+              "bench: start frames of every dataset sequence (suite and --dataset), overriding "
+              "the suite's `starts`: a count N (frames 0..N-1) or a list 0,5,10 (one frame F: "
+              "\"F,\"); each start is one run per configuration (`dala run --first_frame`)");
 DEFINE_double(run_timeout, -1.0,
               "bench: per-run timeout in seconds (0 = none; < 0: the suite's timeout_s)");
 
@@ -70,7 +74,15 @@ int RunBenchCommand(const std::vector<std::string>& args) {
                   << " arguments; see `dala bench --help`";
   }
   bench::BenchSuite suite = bench::LoadBenchSuite(args[0]);
+  for (const std::string& note : suite.skipped) std::cerr << "dala bench: " << note << std::endl;
   for (const std::string& folder : DatasetFlags()) bench::AddDatasetSequence(folder, &suite);
+  if (!FLAGS_starts.empty()) {
+    const std::vector<int> starts = bench::ParseStartsFlag(FLAGS_starts);
+    if (bench::SetDatasetStarts(starts, &suite) == 0) {
+      std::cerr << "dala bench: --starts: the suite has no dataset sequence (rendered presets "
+                << "take `seeds` in the suite file); nothing changed" << std::endl;
+    }
+  }
 
   bench::BenchOptions options;
   options.out_dir = FLAGS_out;
@@ -88,20 +100,24 @@ int RunBenchCommand(const std::vector<std::string>& args) {
 const CommandRegistrar registrar(
     {"bench", "run a benchmark suite (sequences x estimators) and report ATE/RPE/time/memory",
      "dala bench SUITE.yaml --out DIR [--jobs N] [--shard i/n] [--force] [--dala PATH]\n"
-     "                  [--dataset FOLDER]... [--run_timeout S]\n"
+     "                  [--dataset FOLDER]... [--starts N|a,b,...] [--run_timeout S]\n"
      "       dala bench merge DIR... --out DIR\n\n"
      "Runs every sequence x configuration of the suite as a `dala run` subprocess (a run that\n"
-     "fails, crashes or times out is recorded and the others go on), renders preset sequences\n"
-     "once with `dala synth` into DIR/sequences, re-evaluates each trajectory against ground\n"
-     "truth (ATE with SE(3) alignment for stereo and Sim(3) for mono, RPE over 1 and 10 frames,\n"
-     "KITTI segment errors), and writes DIR/results.json, results.csv, results.md and a static\n"
-     "DIR/report.html with the plots. Finished runs are reused unless --force. `merge` gathers\n"
-     "the folders of several shards into one report. Exit status 0 when every run was recorded\n"
-     "(whatever its status), 2 on a bad suite, flag or output folder.\n"
+     "fails, crashes or times out is recorded and the others go on); a sequence with `seeds`\n"
+     "(rendered) or `starts` (dataset, or --starts) runs once per seed or start frame, and the\n"
+     "tables give the median, best and worst over them. Preset sequences are rendered\n"
+     "once per seed with `dala synth` into DIR/sequences, and each trajectory is re-evaluated\n"
+     "against ground truth (ATE with SE(3) alignment for stereo and Sim(3) for mono, RPE over\n"
+     "1 and 10 frames, KITTI segment errors); outputs: DIR/results.json, results.csv,\n"
+     "summary.csv, results.md and a static DIR/report.html with the plots. Finished runs are\n"
+     "reused unless --force. `merge` gathers the folders of several shards into one report.\n"
+     "Exit status 0 when every run was recorded (whatever its status), 2 on a bad suite, flag\n"
+     "or output folder.\n"
      "Suite format, outputs and the Slurm / Kubernetes recipes: docs/benchmarking.md.\n\n"
      "examples:\n"
      "  dala bench benchmarks/default.yaml --out bench_out --jobs 2\n"
      "  dala bench benchmarks/default.yaml --out bench_out --dataset /data/kitti/sequences/06\n"
+     "  dala bench suite.yaml --out bench_out --dataset /data/kitti/sequences/06 --starts 10\n"
      "  dala bench suite.yaml --out part3 --shard 3/8 && dala bench merge part* --out all",
      &RunBenchCommand, __FILE__});
 

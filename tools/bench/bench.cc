@@ -46,11 +46,14 @@ void ParallelFor(int n, int jobs, const std::function<void(int)>& fn) {
 nlohmann::json RunSpec(const BenchRun& run) {
   const SequenceSpec& s = run.sequence;
   const ConfigSpec& c = run.config;
-  return {{"sequence", s.is_rendered() ? nlohmann::json{{"preset", s.preset},
-                                                        {"frames", s.frames},
-                                                        {"seed", s.seed},
-                                                        {"mono", s.mono}}
-                                       : nlohmann::json{{"path", s.path}}},
+  nlohmann::json sequence = s.is_rendered() ? nlohmann::json{{"preset", s.preset},
+                                                             {"frames", s.frames},
+                                                             {"seed", s.seed},
+                                                             {"mono", s.mono}}
+                                            : nlohmann::json{{"path", s.path}};
+  // Only for start variants, so that the markers of runs without starts stay valid.
+  if (run.has_start()) sequence["first_frame"] = run.first_frame;
+  return {{"sequence", sequence},
           {"estimator", c.estimator},
           {"mode", c.mode},
           {"config", c.config_file},
@@ -160,12 +163,17 @@ std::vector<std::string> RunCommand(const BenchRun& run, const std::string& dala
     argv.insert(argv.end(), {"--config", run.config.config_file});
   }
   for (const std::string& kv : run.config.set) argv.insert(argv.end(), {"--set", kv});
+  if (run.has_start()) argv.insert(argv.end(), {"--first_frame", std::to_string(run.first_frame)});
   return argv;
 }
 
-// Where a run's outputs go, relative to the output folder.
-std::string RunDirOf(const BenchRun& run) {
-  return "runs/" + run.sequence.name + "/" + run.config.name;
+// Where a run's outputs go, relative to the output folder: runs/SEQ[@VARIANT]/CONFIG.
+std::string RunDirOf(const BenchRun& run) { return "runs/" + run.key(); }
+
+// The folder a run reads: DIR/sequences/SEQ[@seedS] for a rendered preset, else the dataset.
+std::string SequenceFolderOf(const BenchRun& run, const std::string& out_dir) {
+  return run.sequence.is_rendered() ? out_dir + "/sequences/" + run.folder_name()
+                                    : run.sequence.path;
 }
 
 // Resume: a run whose folder holds its report.json and a done marker for the same specification
@@ -195,6 +203,12 @@ void ExecuteRun(const BenchRun& run, const SequenceState& seq, const BenchOption
   r->index = run.index;
   r->sequence = run.sequence.name;
   r->config = run.config.name;
+  r->variant = run.variant;
+  if (run.sequence.is_rendered()) {
+    r->seed = run.sequence.seed;
+  } else {
+    r->start = run.first_frame;
+  }
   r->estimator = run.config.estimator;
   r->mode = run.config.mode;
   r->run_dir = RunDirOf(run);
@@ -224,7 +238,7 @@ void ExecuteRun(const BenchRun& run, const SequenceState& seq, const BenchOption
 }
 
 std::string Describe(const BenchRunResult& r) {
-  std::string line = r.sequence + "/" + r.config + "  " + r.status + "  " + Seconds(r.wall_s);
+  std::string line = RunKey(r) + "  " + r.status + "  " + Seconds(r.wall_s);
   if (r.ate_rmse) {
     char buf[64];
     std::snprintf(buf, sizeof(buf), "  ATE %.4f m", *r.ate_rmse);
@@ -286,29 +300,30 @@ BenchSummary RunBench(const BenchSuite& suite, const BenchOptions& options_in) {
             << " of " << all.size() << "), " << options.jobs << " at once, into " << options.out_dir
             << std::endl;
 
-  // Sequences of this shard: render the presets, load the ground truth.
-  std::map<std::string, SequenceState> sequences;
-  std::vector<const SequenceSpec*> to_render;
+  // Sequence folders of this shard (one per seed of a rendered preset; the start variants of a
+  // dataset share its folder): render the presets, load the ground truth.
+  std::map<std::string, SequenceState> sequences;  // By folder.
+  std::vector<const BenchRun*> to_render;
   for (const BenchRun& run : runs) {
-    const SequenceSpec& s = run.sequence;
-    if (sequences.count(s.name)) continue;
-    SequenceState& state = sequences[s.name];
-    state.folder = s.is_rendered() ? options.out_dir + "/sequences/" + s.name : s.path;
-    if (s.is_rendered()) to_render.push_back(&s);
+    const std::string folder = SequenceFolderOf(run, options.out_dir);
+    if (sequences.count(folder)) continue;
+    sequences[folder].folder = folder;
+    if (run.sequence.is_rendered()) to_render.push_back(&run);
   }
   ParallelFor(static_cast<int>(to_render.size()), options.jobs, [&](int i) {
-    const SequenceSpec& s = *to_render[i];
+    const BenchRun& run = *to_render[i];
+    const std::string folder = SequenceFolderOf(run, options.out_dir);
     const auto start = std::chrono::steady_clock::now();
     std::string error;
     try {
-      error = RenderSequence(s, options, sequences.at(s.name).folder);
+      error = RenderSequence(run.sequence, options, folder);
     } catch (const Error& e) {
       error = e.what();
     }
-    sequences.at(s.name).render_error = error;  // Distinct map entries: no data race.
+    sequences.at(folder).render_error = error;  // Distinct map entries: no data race.
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cerr << "sequence " << s.name << ": "
+    std::cerr << "sequence " << run.folder_name() << ": "
               << (error.empty() ? "ready (" + Seconds(secs) + ")" : "FAILED: " + error)
               << std::endl;
   });
@@ -321,7 +336,7 @@ BenchSummary RunBench(const BenchSuite& suite, const BenchOptions& options_in) {
   std::vector<char> skipped(runs.size(), 0);
   ProgressPrinter progress(static_cast<int>(runs.size()));
   ParallelFor(static_cast<int>(runs.size()), options.jobs, [&](int k) {
-    const SequenceState& seq = sequences.at(runs[k].sequence.name);
+    const SequenceState& seq = sequences.at(SequenceFolderOf(runs[k], options.out_dir));
     if (!options.force && ReuseDoneRun(runs[k], options.out_dir, &rows[k])) {
       skipped[k] = 1;
       progress.Print(Describe(rows[k]) + "  [done before, skipped]");
@@ -365,7 +380,7 @@ void MergeBench(const std::vector<std::string>& dirs, const std::string& out_dir
     std::error_code ec;
     const bool same = fs::equivalent(dir, out_dir, ec);
     for (const BenchRunResult& r : part) {
-      const std::string key = r.sequence + "/" + r.config;
+      const std::string key = RunKey(r);
       const auto [it, inserted] = seen.emplace(key, dir);
       if (!inserted) {
         throw Error() << "run " << key << " is in both " << it->second << " and " << dir

@@ -6,11 +6,12 @@
 // report.html (tools/bench/report_writer.h). docs/benchmarking.md is the user's guide.
 //
 // Layout of the output folder DIR:
-//   DIR/sequences/NAME/          rendered presets (`dala synth`), reused when already there
-//   DIR/runs/SEQ/CONFIG/         dala run's outputs, log.txt (its stdout+stderr), eval.png,
+//   DIR/sequences/NAME[@seedS]/  rendered presets (`dala synth`), reused when already there
+//   DIR/runs/SEQ[@VARIANT]/CONFIG/  (VARIANT: seedS or startF, see suite.h)
+//                                dala run's outputs, log.txt (its stdout+stderr), eval.png,
 //                                timing.png, bench_series.json, bench_done.json (the done marker)
 //   DIR/plots/                   per-sequence comparison charts
-//   DIR/results.{json,csv,md}, DIR/report.html
+//   DIR/results.{json,csv,md}, DIR/summary.csv, DIR/report.html
 
 #include <string>
 #include <vector>

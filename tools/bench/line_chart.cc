@@ -52,11 +52,44 @@ void Text(cv::Mat* img, const std::string& text, cv::Point at, double scale,
   cv::putText(*img, text, at, kFont, scale, colour, thickness, cv::LINE_AA);
 }
 
+int LegendTextWidth(const std::vector<ChartSeries>& series) {
+  int w = 0;
+  for (const ChartSeries& s : series) w = std::max(w, TextSize(s.name, 0.45).width);
+  return w;
+}
+
+// The points of a series in the plot area's pixels, x16 for cv's sub-pixel shift of 4 bits.
+template <typename ToPixel>
+std::vector<cv::Point> SeriesPixels(const ChartSeries& s, const ToPixel& px, const cv::Rect& area) {
+  std::vector<cv::Point> pts;
+  for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+    if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+    const cv::Point2d p = px(s.x[i], s.y[i]) - cv::Point2d(area.x, area.y);
+    pts.emplace_back(static_cast<int>(std::lround(p.x * 16)),
+                     static_cast<int>(std::lround(p.y * 16)));
+  }
+  return pts;
+}
+
+void DrawSeries(const std::vector<cv::Point>& pts, ChartStyle style, const cv::Scalar& colour,
+                cv::Mat* plot) {
+  if (style == ChartStyle::kPoints || pts.size() == 1) {
+    for (const cv::Point& p : pts) cv::circle(*plot, p, 4 * 16, colour, -1, cv::LINE_AA, 4);
+  } else if (style == ChartStyle::kSegments) {
+    for (size_t i = 0; i + 1 < pts.size(); i += 2) {
+      cv::line(*plot, pts[i], pts[i + 1], colour, 2, cv::LINE_AA, 4);
+    }
+  } else if (pts.size() > 1) {
+    cv::polylines(*plot, pts, false, colour, 2, cv::LINE_AA, 4);
+  }
+}
+
 }  // namespace
 
 cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartOptions& options) {
   cv::Mat img(options.height, options.width, CV_8UC3, cv::Scalar::all(255));
-  const cv::Rect area(78, 40, options.width - 78 - 20, options.height - 40 - 58);
+  const int legend_w = options.legend_outside && !series.empty() ? LegendTextWidth(series) + 56 : 0;
+  const cv::Rect area(78, 40, options.width - 78 - 20 - legend_w, options.height - 40 - 58);
 
   double x0 = std::numeric_limits<double>::max(), x1 = -x0, y0 = x0, y1 = -x0;
   for (const ChartSeries& s : series) {
@@ -73,6 +106,10 @@ cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartO
   if (!has_data) {
     x0 = 0, x1 = 1, y0 = 0, y1 = 1;
   }
+  if (!options.x_categories.empty()) {
+    x0 = -0.5;
+    x1 = static_cast<double>(options.x_categories.size()) - 0.5;
+  }
   if (options.y_from_zero && y0 > 0) y0 = 0;
   if (x1 - x0 < 1e-12) x1 = x0 + 1;
   if (y1 - y0 < 1e-12) y1 = y0 + (std::abs(y0) > 0 ? std::abs(y0) * 0.1 : 1.0);
@@ -84,7 +121,14 @@ cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartO
   };
   // Grid and ticks.
   const double xs = NiceStep(x1 - x0, 8), ys = NiceStep(y1 - y0, 5);
-  for (double v = std::ceil(x0 / xs) * xs; v <= x1 + 1e-9 * xs; v += xs) {
+  for (size_t i = 0; i < options.x_categories.size(); ++i) {
+    const int x = static_cast<int>(std::lround(px(static_cast<double>(i), y0).x));
+    cv::line(img, {x, area.y}, {x, area.y + area.height}, kGrid, 1);
+    const std::string& t = options.x_categories[i];
+    Text(&img, t, {x - TextSize(t, 0.42).width / 2, area.y + area.height + 18}, 0.42);
+  }
+  for (double v = std::ceil(x0 / xs) * xs; options.x_categories.empty() && v <= x1 + 1e-9 * xs;
+       v += xs) {
     const int x = static_cast<int>(std::lround(px(v, y0).x));
     cv::line(img, {x, area.y}, {x, area.y + area.height}, kGrid, 1);
     const std::string t = Tick(v, xs);
@@ -113,34 +157,29 @@ cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartO
   // Series, clipped to the plot area.
   cv::Mat plot = img(area);
   for (size_t k = 0; k < series.size(); ++k) {
-    std::vector<cv::Point> pts;
-    const ChartSeries& s = series[k];
-    for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-      const cv::Point2d p = px(s.x[i], s.y[i]) - cv::Point2d(area.x, area.y);
-      pts.emplace_back(static_cast<int>(std::lround(p.x * 16)),
-                       static_cast<int>(std::lround(p.y * 16)));
-    }
-    if (pts.size() == 1) cv::circle(plot, pts[0], 3 * 16, SeriesColour(k), -1, cv::LINE_AA, 4);
-    if (pts.size() > 1) {
-      cv::polylines(plot, pts, false, SeriesColour(k), 2, cv::LINE_AA, 4);
-    }
+    DrawSeries(SeriesPixels(series[k], px, area), series[k].style,
+               series[k].colour.value_or(SeriesColour(k)), &plot);
   }
   if (!has_data) {
     Text(&img, "no data", {area.x + area.width / 2 - 30, area.y + area.height / 2}, 0.6);
   }
   // Legend in the top-right corner of the plot area, on a white box.
   if (!series.empty()) {
-    int w = 0;
-    for (const ChartSeries& s : series) w = std::max(w, TextSize(s.name, 0.45).width);
+    const int w = LegendTextWidth(series);
     const int row = 20;
-    const cv::Rect box(area.x + area.width - w - 48, area.y + 6, w + 42,
-                       row * static_cast<int>(series.size()) + 8);
+    const int left =
+        options.legend_outside ? area.x + area.width + 8 : area.x + area.width - w - 48;
+    const cv::Rect box(left, area.y + 6, w + 42, row * static_cast<int>(series.size()) + 8);
     cv::rectangle(img, box, cv::Scalar::all(255), -1);
     cv::rectangle(img, box, kAxis, 1);
     for (size_t k = 0; k < series.size(); ++k) {
       const int y = box.y + 14 + row * static_cast<int>(k);
-      cv::line(img, {box.x + 6, y - 4}, {box.x + 28, y - 4}, SeriesColour(k), 3, cv::LINE_AA);
+      const cv::Scalar colour = series[k].colour.value_or(SeriesColour(k));
+      if (series[k].style == ChartStyle::kPoints) {
+        cv::circle(img, {box.x + 17, y - 4}, 4, colour, -1, cv::LINE_AA);
+      } else {
+        cv::line(img, {box.x + 6, y - 4}, {box.x + 28, y - 4}, colour, 3, cv::LINE_AA);
+      }
       Text(&img, series[k].name, {box.x + 34, y + 1}, 0.45);
     }
   }
@@ -180,8 +219,8 @@ void DrawStackedLineCharts(const std::vector<StackedChart>& charts, const std::s
   }
   cv::Mat stacked;
   if (images.empty()) {
-    stacked = cv::Mat(LineChartOptions().height, LineChartOptions().width, CV_8UC3,
-                      cv::Scalar::all(255));
+    stacked =
+        cv::Mat(LineChartOptions().height, LineChartOptions().width, CV_8UC3, cv::Scalar::all(255));
   } else {
     cv::vconcat(images, stacked);
   }

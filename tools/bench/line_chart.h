@@ -4,16 +4,28 @@
 // A small line chart drawn with OpenCV into a PNG (no plotting library): title, axes with
 // 1-2-5 ticks and grid, axis labels, one polyline per series and a legend.
 
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace dala::bench {
 
+// How a series is drawn: a polyline; a dot per point (a strip plot); or a segment per pair of
+// points (x[0],y[0])-(x[1],y[1]), (x[2],y[2])-(x[3],y[3]), ... (e.g. a median bar per category).
+enum class ChartStyle { kLine, kPoints, kSegments };
+
 struct ChartSeries {
+  ChartSeries() = default;
+  ChartSeries(std::string name, std::vector<double> x, std::vector<double> y,
+              ChartStyle style = ChartStyle::kLine)
+      : name(std::move(name)), x(std::move(x)), y(std::move(y)), style(style) {}
+
   std::string name;  // Legend entry.
   std::vector<double> x, y;
+  ChartStyle style = ChartStyle::kLine;
+  std::optional<cv::Scalar> colour;  // BGR; default: the palette's colour of its position.
 };
 
 struct LineChartOptions {
@@ -24,6 +36,12 @@ struct LineChartOptions {
   int height = 380;  // Pixels.
   // The y axis starts at 0 (errors, times) unless a value is negative.
   bool y_from_zero = true;
+  // A categorical x axis: category i is drawn at x = i, labelled with its name, and the axis
+  // spans [-0.5, n - 0.5]. Empty: a numeric axis over the data.
+  std::vector<std::string> x_categories;
+  // The legend to the right of the plot area instead of over its top-right corner (for many
+  // entries, or points that would hide under it).
+  bool legend_outside = false;
 };
 
 // Draws the chart and writes it atomically to `png_path`; throws dala::Error naming the path

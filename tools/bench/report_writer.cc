@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/io/atomic_file.h"
 #include "tools/bench/line_chart.h"
+#include "tools/bench/summary.h"
 
 namespace dala::bench {
 namespace fs = std::filesystem;
@@ -37,6 +38,9 @@ const std::vector<Column>& Columns() {
   static const std::vector<Column> columns = {
       {"sequence", "sequence", [](const auto& r) { return r.sequence; }},
       {"config", "config", [](const auto& r) { return r.config; }},
+      {"variant", "variant", [](const auto& r) { return r.variant; }},
+      {"start", "start", [](const auto& r) { return Int(r.start); }},
+      {"seed", "seed", [](const auto& r) { return Int(r.seed); }},
       {"estimator", "estimator", [](const auto& r) { return r.estimator; }},
       {"mode", "mode", [](const auto& r) { return r.mode; }},
       {"status", "status", [](const auto& r) { return r.status; }},
@@ -115,13 +119,20 @@ std::string MdEscape(const std::string& s) {
   return out;
 }
 
-// Sequences and configurations in sorted order, and the row of each pair.
+// Sequences and configurations in sorted order, and the runs (variants) of each pair.
+using Cell = std::vector<const BenchRunResult*>;  // In run order.
 struct Grid {
   std::vector<std::string> sequences, configs;
-  std::map<std::pair<std::string, std::string>, const BenchRunResult*> cell;
-  const BenchRunResult* At(const std::string& s, const std::string& c) const {
+  std::map<std::pair<std::string, std::string>, Cell> cell;
+  bool has_variants = false;  // Some pair has more than one run.
+  const Cell& At(const std::string& s, const std::string& c) const {
+    static const Cell kNone;
     const auto it = cell.find({s, c});
-    return it == cell.end() ? nullptr : it->second;
+    return it == cell.end() ? kNone : it->second;
+  }
+  bool SequenceHasVariants(const std::string& s) const {
+    return std::any_of(configs.begin(), configs.end(),
+                       [&](const std::string& c) { return At(s, c).size() > 1; });
   }
 };
 
@@ -131,12 +142,17 @@ Grid MakeGrid(const std::vector<BenchRunResult>& rows) {
   for (const BenchRunResult& r : rows) {
     seqs.insert(r.sequence);
     cfgs.insert(r.config);
-    g.cell[{r.sequence, r.config}] = &r;
+    Cell& cell = g.cell[{r.sequence, r.config}];
+    cell.push_back(&r);
+    g.has_variants = g.has_variants || cell.size() > 1;
   }
   g.sequences.assign(seqs.begin(), seqs.end());
   g.configs.assign(cfgs.begin(), cfgs.end());
   return g;
 }
+
+// "start3" for a variant, "-" for a run without one (for table cells).
+std::string VariantText(const std::string& variant) { return variant.empty() ? "-" : variant; }
 
 // The metrics of the side-by-side tables: lower is better for all of them.
 struct Metric {
@@ -162,23 +178,157 @@ const std::vector<Metric>& SideBySideMetrics() {
   return metrics;
 }
 
-std::string CellText(const BenchRunResult* r, const Metric& m) {
-  if (r == nullptr) return "";
-  if (r->status != kStatusOk) return r->status;
-  const std::optional<double> v = m.get(*r);
+// The value of a metric in a cell: its median over the cell's ok runs (the value itself for a
+// cell of one run).
+std::optional<double> CellValue(const Cell& cell, const Metric& m) {
+  std::vector<double> values;
+  for (const BenchRunResult* r : cell) {
+    if (r->status != kStatusOk) continue;
+    if (const auto v = m.get(*r)) values.push_back(*v);
+  }
+  return Percentile(values, 50.0);
+}
+
+int CountOk(const Cell& cell) {
+  return static_cast<int>(std::count_if(
+      cell.begin(), cell.end(), [](const BenchRunResult* r) { return r->status == kStatusOk; }));
+}
+
+// What a cell shows instead of a value when no run of it is ok: the common status, else "failed".
+std::string CellStatus(const Cell& cell) {
+  for (const BenchRunResult* r : cell) {
+    if (r->status != cell.front()->status) return kStatusFailed;
+  }
+  return cell.front()->status;
+}
+
+// " (1/3 failed)" when some runs of a cell with ok runs are not ok: failures are counted, not
+// hidden behind the median of the others.
+std::string FailureNote(const Cell& cell) {
+  const int failed = static_cast<int>(cell.size()) - CountOk(cell);
+  if (failed == 0) return "";
+  return " (" + std::to_string(failed) + "/" + std::to_string(cell.size()) + " failed)";
+}
+
+std::string CellText(const Cell& cell, const Metric& m) {
+  if (cell.empty()) return "";
+  if (CountOk(cell) == 0) return CellStatus(cell);
+  const std::optional<double> v = CellValue(cell, m);
   return v ? Fixed(v, m.decimals) : "-";
 }
 
-// The best (lowest) value of a metric in a sequence row, among ok runs.
+// The best (lowest) cell value of a metric in a sequence row.
 std::optional<double> Best(const Grid& g, const std::string& seq, const Metric& m) {
   std::optional<double> best;
   for (const std::string& c : g.configs) {
-    const BenchRunResult* r = g.At(seq, c);
-    if (r == nullptr || r->status != kStatusOk) continue;
-    const auto v = m.get(*r);
+    const auto v = CellValue(g.At(seq, c), m);
     if (v && (!best || *v < *best)) best = v;
   }
   return best;
+}
+
+bool IsBest(const Cell& cell, const Metric& m, const std::optional<double>& best) {
+  const auto v = CellValue(cell, m);
+  return v && best && Fixed(v, m.decimals) == Fixed(best, m.decimals);
+}
+
+// The columns of the spread table (results.md, report.html, summary.csv).
+struct SpreadColumn {
+  const char* key;
+  const char* title;
+  std::function<std::string(const SpreadSummary&)> value;
+};
+const std::vector<SpreadColumn>& SpreadColumns() {
+  static const std::vector<SpreadColumn> columns = {
+      {"sequence", "sequence", [](const auto& s) { return s.sequence; }},
+      {"config", "config", [](const auto& s) { return s.config; }},
+      {"runs", "runs", [](const auto& s) { return std::to_string(s.runs); }},
+      {"not_ok", "failed", [](const auto& s) { return std::to_string(s.runs - s.ok); }},
+      {"ate_median", "ATE median [m]", [](const auto& s) { return Fixed(s.median, 4); }},
+      {"ate_best", "best [m]", [](const auto& s) { return Fixed(s.best, 4); }},
+      {"ate_best_variant", "best run",
+       [](const auto& s) { return s.best ? VariantText(s.best_variant) : ""; }},
+      {"ate_worst", "worst [m]", [](const auto& s) { return Fixed(s.worst, 4); }},
+      {"ate_worst_variant", "worst run",
+       [](const auto& s) { return s.worst ? VariantText(s.worst_variant) : ""; }},
+      {"not_ok_runs", "failed runs",
+       [](const auto& s) {
+         std::string list;
+         for (const std::string& f : s.not_ok) list += (list.empty() ? "" : ", ") + f;
+         return list;
+       }},
+  };
+  return columns;
+}
+
+// Names rather than numbers: left-aligned.
+bool IsTextColumn(const SpreadColumn& c) {
+  const std::string key = c.key;
+  return key == "sequence" || key == "config" || key.find("variant") != std::string::npos ||
+         key == "not_ok_runs";
+}
+
+const char* kSpreadTitle = "ATE RMSE over the runs of each sequence and configuration";
+const char* kSpreadNote =
+    "One row per sequence and configuration, over its runs (one per seed or start frame; "
+    "a sequence without seeds or starts has one): failed counts runs that are not ok "
+    "(failed, crashed, timeout, unsupported), which are not part of the median, best and worst.";
+
+std::string MarkdownSpread(const std::vector<BenchRunResult>& rows) {
+  std::string md = "\n## " + std::string(kSpreadTitle) + "\n\n" + kSpreadNote + "\n\n|";
+  for (const SpreadColumn& c : SpreadColumns()) md += " " + std::string(c.title) + " |";
+  md += "\n|";
+  for (const SpreadColumn& c : SpreadColumns()) md += IsTextColumn(c) ? "---|" : "---:|";
+  md += "\n";
+  for (const SpreadSummary& s : SummarizeAte(rows)) {
+    md += "|";
+    for (const SpreadColumn& c : SpreadColumns()) md += " " + MdEscape(c.value(s)) + " |";
+    md += "\n";
+  }
+  return md;
+}
+
+// ATE of every run, a row per (sequence, variant), a column per configuration.
+struct VariantRow {
+  std::string sequence, variant;
+};
+std::vector<VariantRow> VariantRows(const std::vector<BenchRunResult>& rows) {
+  std::vector<VariantRow> out;
+  std::set<std::string> seen;
+  for (const BenchRunResult& r : rows) {  // Run order: sequences, then variants in order.
+    if (seen.insert(r.sequence + "@" + r.variant).second) out.push_back({r.sequence, r.variant});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const VariantRow& a, const VariantRow& b) {
+    return a.sequence < b.sequence;
+  });
+  return out;
+}
+
+const BenchRunResult* RunOf(const Grid& g, const VariantRow& v, const std::string& config) {
+  for (const BenchRunResult* r : g.At(v.sequence, config)) {
+    if (r->variant == v.variant) return r;
+  }
+  return nullptr;
+}
+
+std::string RunAteText(const BenchRunResult* r) {
+  if (r == nullptr) return "";
+  if (r->status != kStatusOk) return r->status;
+  return r->ate_rmse ? Fixed(r->ate_rmse, 4) : "-";
+}
+
+std::string MarkdownPerVariant(const Grid& g, const std::vector<BenchRunResult>& rows) {
+  std::string md = "\n## ATE RMSE [m] of every run\n\n| sequence | run |";
+  for (const std::string& c : g.configs) md += " " + c + " |";
+  md += "\n|---|---|";
+  for (size_t i = 0; i < g.configs.size(); ++i) md += "---:|";
+  md += "\n";
+  for (const VariantRow& v : VariantRows(rows)) {
+    md += "| " + v.sequence + " | " + VariantText(v.variant) + " |";
+    for (const std::string& c : g.configs) md += " " + RunAteText(RunOf(g, v, c)) + " |";
+    md += "\n";
+  }
+  return md;
 }
 
 std::string Markdown(const BenchHeader& header, const std::vector<BenchRunResult>& rows) {
@@ -187,8 +337,16 @@ std::string Markdown(const BenchHeader& header, const std::vector<BenchRunResult
   md += "Suite: `" + header.suite + "`" + (header.shard.empty() ? "" : ", shard " + header.shard) +
         ", " + std::to_string(rows.size()) + " of " + std::to_string(header.runs_total) +
         " runs. Metrics: docs/benchmarking.md. Best value of each row in **bold**.\n";
+  if (g.has_variants) {
+    md +=
+        "\nSequences with seeds or start frames have several runs per configuration: the "
+        "side-by-side tables give the median over the ok runs, and \"(k/n failed)\" when some "
+        "were not ok.\n";
+  }
+  md += MarkdownSpread(rows);
+  if (g.has_variants) md += MarkdownPerVariant(g, rows);
   for (const Metric& m : SideBySideMetrics()) {
-    md += "\n## " + std::string(m.title) + "\n\n| sequence |";
+    md += "\n## " + std::string(m.title) + (g.has_variants ? ", median" : "") + "\n\n| sequence |";
     for (const std::string& c : g.configs) md += " " + c + " |";
     md += "\n|---|";
     for (size_t i = 0; i < g.configs.size(); ++i) md += "---:|";
@@ -197,12 +355,10 @@ std::string Markdown(const BenchHeader& header, const std::vector<BenchRunResult
       const std::optional<double> best = Best(g, s, m);
       md += "| " + s + " |";
       for (const std::string& c : g.configs) {
-        const BenchRunResult* r = g.At(s, c);
-        std::string text = CellText(r, m);
-        if (r != nullptr && r->status == kStatusOk && best && m.get(*r) &&
-            Fixed(m.get(*r), m.decimals) == Fixed(best, m.decimals)) {
-          text = "**" + text + "**";
-        }
+        const Cell& cell = g.At(s, c);
+        std::string text = CellText(cell, m);
+        if (IsBest(cell, m, best)) text = "**" + text + "**";
+        if (!cell.empty() && CountOk(cell) > 0) text += FailureNote(cell);
         md += " " + text + " |";
       }
       md += "\n";
@@ -255,12 +411,117 @@ std::string StatusSpan(const std::string& status) {
   return "<span class=\"" + HtmlEscape(status) + "\">" + HtmlEscape(status) + "</span>";
 }
 
+// A cell of a side-by-side table: the (median) value, or the status when no run is ok; the
+// errors of the runs that are not ok in its tooltip.
+std::string HtmlCell(const Cell& cell, const Metric& m, const std::optional<double>& best) {
+  if (cell.empty()) return "<td></td>";
+  std::string errors;
+  for (const BenchRunResult* r : cell) {
+    if (r->status == kStatusOk || r->error.empty()) continue;
+    errors +=
+        (errors.empty() ? "" : "\n") + (r->variant.empty() ? "" : r->variant + ": ") + r->error;
+  }
+  const std::string title = errors.empty() ? "" : " title=\"" + HtmlEscape(errors) + "\"";
+  if (CountOk(cell) == 0) return "<td" + title + ">" + StatusSpan(CellStatus(cell)) + "</td>";
+  const auto v = CellValue(cell, m);
+  const std::string note = FailureNote(cell);
+  return std::string("<td") + (IsBest(cell, m, best) ? " class=\"best\"" : "") + title + ">" +
+         (v ? Fixed(v, m.decimals) : "&ndash;") +
+         (note.empty() ? "" : "<span class=\"failed\">" + note + "</span>") + "</td>";
+}
+
+std::string HtmlSpread(const std::vector<BenchRunResult>& rows) {
+  std::string h = "<h2>" + std::string(kSpreadTitle) + "</h2>\n<p class=\"small\">" +
+                  HtmlEscape(kSpreadNote) + "</p>\n<table><tr>";
+  for (const SpreadColumn& c : SpreadColumns()) h += "<th>" + HtmlEscape(c.title) + "</th>";
+  h += "</tr>\n";
+  for (const SpreadSummary& s : SummarizeAte(rows)) {
+    h += std::string("<tr") + (s.ok < s.runs ? " class=\"bad\"" : "") + ">";
+    for (const SpreadColumn& c : SpreadColumns()) {
+      const std::string key = c.key;
+      const std::string cls = key == "sequence" || key == "config" ? "name"
+                              : key == "not_ok_runs"               ? "err"
+                                                                   : "";
+      h += "<td" + (cls.empty() ? "" : " class=\"" + cls + "\"") + ">" + HtmlEscape(c.value(s)) +
+           "</td>";
+    }
+    h += "</tr>\n";
+  }
+  return h + "</table>\n";
+}
+
+std::string HtmlPerVariant(const Grid& g, const std::vector<BenchRunResult>& rows) {
+  std::string h =
+      "<h2>ATE RMSE [m] of every run</h2>\n<table><tr><th class=\"name\">sequence</th>"
+      "<th class=\"name\">run</th>";
+  for (const std::string& c : g.configs) h += "<th>" + HtmlEscape(c) + "</th>";
+  h += "</tr>\n";
+  for (const VariantRow& v : VariantRows(rows)) {
+    h += "<tr><td class=\"name\">" + HtmlEscape(v.sequence) + "</td><td class=\"name\">" +
+         HtmlEscape(VariantText(v.variant)) + "</td>";
+    for (const std::string& c : g.configs) {
+      const BenchRunResult* r = RunOf(g, v, c);
+      const bool ok = r == nullptr || r->status == kStatusOk;
+      h += "<td" + (ok ? std::string() : " title=\"" + HtmlEscape(r->error) + "\"") + ">" +
+           (ok ? HtmlEscape(RunAteText(r)) : StatusSpan(r->status)) + "</td>";
+    }
+    h += "</tr>\n";
+  }
+  return h + "</table>\n";
+}
+
+// A run's name in the per-sequence section: the configuration, and its variant if any.
+std::string RunLabel(const BenchRunResult& r) {
+  return r.variant.empty() ? r.config : r.config + " @ " + r.variant;
+}
+
+// The runs of a sequence: those that are not ok in a compact list, then a card per ok run
+// with its plots.
+std::string HtmlSequenceRuns(const Grid& g, const std::string& s,
+                             const std::function<bool(const std::string&)>& exists) {
+  std::string h, failures;
+  for (const std::string& c : g.configs) {
+    for (const BenchRunResult* r : g.At(s, c)) {
+      if (r->status == kStatusOk) continue;
+      const std::string log = r->run_dir + "/log.txt";
+      failures += "<li><b>" + HtmlEscape(RunLabel(*r)) + "</b> " + StatusSpan(r->status) +
+                  (exists(log) ? " (<a href=\"" + HtmlEscape(log) + "\">log</a>)" : "") +
+                  "<div class=\"err small\">" + HtmlEscape(r->error) + "</div></li>\n";
+    }
+  }
+  if (!failures.empty()) h += "<ul class=\"failures\">\n" + failures + "</ul>\n";
+  h += "<div class=\"cards\">\n";
+  for (const std::string& c : g.configs) {
+    for (const BenchRunResult* r : g.At(s, c)) {
+      if (r->status != kStatusOk) continue;
+      h += "<div class=\"card\"><h3>" + HtmlEscape(RunLabel(*r)) + " &middot; " +
+           StatusSpan(r->status) + "</h3>\n";
+      if (r->ate_rmse) {
+        h += "<div class=\"small\">ATE " + Fixed(r->ate_rmse, 4) + " m &middot; RPE(1f) " +
+             Fixed(r->rpe_trans, 4) + " m &middot; " + Fixed(r->ms_median, 1) + " ms median</div>";
+      }
+      if (!r->error.empty()) h += "<div class=\"err small\">" + HtmlEscape(r->error) + "</div>";
+      for (const std::string* png : {&r->plot_trajectory, &r->plot_timing}) {
+        if (exists(*png)) {
+          h += "<img src=\"" + HtmlEscape(*png) + "\" alt=\"" + HtmlEscape(*png) + "\">\n";
+        }
+      }
+      h += "<div class=\"small\">";
+      for (const char* file : {"log.txt", "report.json", "trajectory.txt"}) {
+        const std::string rel = r->run_dir + "/" + file;
+        if (exists(rel)) h += "<a href=\"" + HtmlEscape(rel) + "\">" + file + "</a> ";
+      }
+      h += "</div></div>\n";
+    }
+  }
+  return h + "</div>\n";
+}
+
 std::string Html(const std::string& out_dir, const BenchHeader& header,
                  const std::vector<BenchRunResult>& rows,
-                 const std::map<std::string, std::string>& compare_ate,
-                 const std::map<std::string, std::string>& compare_time) {
+                 const std::map<std::string, std::vector<std::string>>& sequence_pngs) {
   const Grid g = MakeGrid(rows);
-  const auto exists = [&](const std::string& rel) {
+  const std::function<bool(const std::string&)> exists = [&](const std::string& rel) {
     return !rel.empty() && fs::is_regular_file(fs::path(out_dir) / rel);
   };
   int ok = 0;
@@ -285,6 +546,7 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
   h += "<h2>Estimators side by side</h2>\n<div class=\"tables\">\n";
   for (const Metric& m : SideBySideMetrics()) {
     h += "<div><div class=\"metric\">" + std::string(m.title) +
+         (g.has_variants ? ", median over the runs" : "") +
          "</div>\n<table><tr><th class=\"name\">sequence</th>";
     for (const std::string& c : g.configs) h += "<th>" + HtmlEscape(c) + "</th>";
     h += "</tr>\n";
@@ -292,24 +554,14 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
       const std::optional<double> best = Best(g, s, m);
       h += "<tr><td class=\"name\"><a href=\"#seq-" + HtmlEscape(s) + "\">" + HtmlEscape(s) +
            "</a></td>";
-      for (const std::string& c : g.configs) {
-        const BenchRunResult* r = g.At(s, c);
-        if (r == nullptr) {
-          h += "<td></td>";
-        } else if (r->status != kStatusOk) {
-          h += "<td title=\"" + HtmlEscape(r->error) + "\">" + StatusSpan(r->status) + "</td>";
-        } else {
-          const auto v = m.get(*r);
-          const bool is_best = v && best && Fixed(v, m.decimals) == Fixed(best, m.decimals);
-          h += std::string("<td") + (is_best ? " class=\"best\"" : "") + ">" +
-               (v ? Fixed(v, m.decimals) : "&ndash;") + "</td>";
-        }
-      }
+      for (const std::string& c : g.configs) h += HtmlCell(g.At(s, c), m, best);
       h += "</tr>\n";
     }
     h += "</table></div>\n";
   }
   h += "</div>\n";
+  h += HtmlSpread(rows);
+  if (g.has_variants) h += HtmlPerVariant(g, rows);
 
   // Every run, every metric.
   // The error column right after the status, where it is seen.
@@ -344,94 +596,131 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
   // Per sequence: the comparison charts, then each run's plots.
   for (const std::string& s : g.sequences) {
     h += "<h2 id=\"seq-" + HtmlEscape(s) + "\">" + HtmlEscape(s) +
-         "</h2>\n<div class=\"cards "
-         "compare\">";
-    for (const auto* m : {&compare_ate, &compare_time}) {
-      const auto it = m->find(s);
-      if (it != m->end() && exists(it->second)) {
-        h += "<div><img src=\"" + HtmlEscape(it->second) + "\" alt=\"" + HtmlEscape(it->second) +
-             "\"></div>";
+         "</h2>\n<div class=\"cards compare\">";
+    const auto pngs = sequence_pngs.find(s);
+    for (size_t i = 0; pngs != sequence_pngs.end() && i < pngs->second.size(); ++i) {
+      const std::string& png = pngs->second[i];
+      if (exists(png)) {
+        h += "<div><img src=\"" + HtmlEscape(png) + "\" alt=\"" + HtmlEscape(png) + "\"></div>";
       }
     }
     h += "</div>\n";
-    // Runs without plots in a compact list, then a card per run with its plots.
-    std::string failures;
-    for (const std::string& c : g.configs) {
-      const BenchRunResult* r = g.At(s, c);
-      if (r == nullptr || r->status == kStatusOk) continue;
-      const std::string log = r->run_dir + "/log.txt";
-      failures += "<li><b>" + HtmlEscape(c) + "</b> " + StatusSpan(r->status) +
-                  (exists(log) ? " (<a href=\"" + HtmlEscape(log) + "\">log</a>)" : "") +
-                  "<div class=\"err small\">" + HtmlEscape(r->error) + "</div></li>\n";
-    }
-    if (!failures.empty()) h += "<ul class=\"failures\">\n" + failures + "</ul>\n";
-    h += "<div class=\"cards\">\n";
-    for (const std::string& c : g.configs) {
-      const BenchRunResult* r = g.At(s, c);
-      if (r == nullptr || r->status != kStatusOk) continue;
-      h += "<div class=\"card\"><h3>" + HtmlEscape(c) + " &middot; " + StatusSpan(r->status) +
-           "</h3>\n";
-      if (r->status == kStatusOk && r->ate_rmse) {
-        h += "<div class=\"small\">ATE " + Fixed(r->ate_rmse, 4) + " m &middot; RPE(1f) " +
-             Fixed(r->rpe_trans, 4) + " m &middot; " + Fixed(r->ms_median, 1) + " ms median</div>";
-      }
-      if (!r->error.empty()) h += "<div class=\"err small\">" + HtmlEscape(r->error) + "</div>";
-      for (const std::string* png : {&r->plot_trajectory, &r->plot_timing}) {
-        if (exists(*png)) {
-          h += "<img src=\"" + HtmlEscape(*png) + "\" alt=\"" + HtmlEscape(*png) + "\">\n";
-        }
-      }
-      h += "<div class=\"small\">";
-      for (const char* file : {"log.txt", "report.json", "trajectory.txt"}) {
-        const std::string rel = r->run_dir + "/" + file;
-        if (exists(rel)) h += "<a href=\"" + HtmlEscape(rel) + "\">" + file + "</a> ";
-      }
-      h += "</div></div>\n";
-    }
-    h += "</div>\n";
+    h += HtmlSequenceRuns(g, s, exists);
   }
   h += "</body></html>\n";
   return h;
 }
 
-// The per-sequence comparison charts; returns the relative paths drawn.
-void DrawComparisons(const std::string& out_dir, const std::vector<BenchRunResult>& rows,
-                     const std::map<std::string, RunSeries>& series,
-                     std::map<std::string, std::string>* ate_pngs,
-                     std::map<std::string, std::string>* time_pngs) {
-  const Grid g = MakeGrid(rows);
-  CreateDirectories(out_dir + "/plots");
-  for (const std::string& s : g.sequences) {
-    std::vector<ChartSeries> ate, time;
-    for (const std::string& c : g.configs) {
-      const BenchRunResult* r = g.At(s, c);
-      if (r == nullptr || r->status != kStatusOk) continue;
-      const auto it = series.find(r->run_dir);
-      if (it == series.end()) continue;
-      if (!it->second.ate_m.empty()) ate.push_back({c, it->second.distance_m, it->second.ate_m});
-      if (!it->second.ms_total.empty()) {
-        time.push_back({c, it->second.frame, it->second.ms_total});
+// The spread of the ATE over a sequence's runs: per configuration (x), a dot per run coloured
+// by its variant, and the median as a bar. Failed runs have no dot; the x labels count them.
+void DrawSpread(const Grid& g, const std::string& s, const std::string& png) {
+  std::vector<std::string> variants;  // In run order.
+  for (const std::string& c : g.configs) {
+    for (const BenchRunResult* r : g.At(s, c)) {
+      if (std::find(variants.begin(), variants.end(), r->variant) == variants.end()) {
+        variants.push_back(r->variant);
       }
     }
+  }
+  std::vector<ChartSeries> dots(variants.size());
+  ChartSeries median("median", {}, {}, ChartStyle::kSegments);
+  median.colour = cv::Scalar(40, 40, 40);
+  LineChartOptions o;
+  for (size_t v = 0; v < variants.size(); ++v) {
+    dots[v].name = VariantText(variants[v]);
+    dots[v].style = ChartStyle::kPoints;
+  }
+  // Variants side by side within a category, so that each dot can be told apart.
+  const double width = 0.5;
+  const auto offset = [&](size_t v) {
+    return variants.size() < 2 ? 0.0 : -width / 2 + width * v / (variants.size() - 1.0);
+  };
+  for (size_t i = 0; i < g.configs.size(); ++i) {
+    const Cell& cell = g.At(s, g.configs[i]);
+    const int failed = static_cast<int>(cell.size()) - CountOk(cell);
+    o.x_categories.push_back(g.configs[i] +
+                             (failed > 0 ? " (" + std::to_string(failed) + " failed)" : ""));
+    for (const BenchRunResult* r : cell) {
+      if (r->status != kStatusOk || !r->ate_rmse) continue;
+      const size_t v = static_cast<size_t>(std::find(variants.begin(), variants.end(), r->variant) -
+                                           variants.begin());
+      dots[v].x.push_back(static_cast<double>(i) + offset(v));
+      dots[v].y.push_back(*r->ate_rmse);
+    }
+    const Metric ate{"", [](const BenchRunResult& r) { return r.ate_rmse; }, 4};
+    if (const auto m = CellValue(cell, ate)) {
+      median.x.insert(median.x.end(), {i - width / 2 - 0.1, i + width / 2 + 0.1});
+      median.y.insert(median.y.end(), {*m, *m});
+    }
+  }
+  dots.insert(dots.begin(), median);  // First, so that the dots are drawn over the bar.
+  o.title = s + ": ATE RMSE of every run (dots) and the median (bar)";
+  o.x_label = "configuration";
+  o.y_label = "ATE RMSE [m]";
+  o.legend_outside = true;
+  o.width = std::max(900, 160 * static_cast<int>(g.configs.size()) + 200);
+  DrawLineChart(dots, o, png);
+}
+
+// The runs drawn in a sequence's comparison charts: each configuration's first ok run (one
+// curve per configuration stays readable; the spread plot shows all runs).
+std::vector<const BenchRunResult*> ComparedRuns(const Grid& g, const std::string& s) {
+  std::vector<const BenchRunResult*> runs;
+  for (const std::string& c : g.configs) {
+    for (const BenchRunResult* r : g.At(s, c)) {
+      if (r->status != kStatusOk) continue;
+      runs.push_back(r);
+      break;
+    }
+  }
+  return runs;
+}
+
+// The per-sequence charts; returns the relative paths drawn, per sequence.
+std::map<std::string, std::vector<std::string>> DrawComparisons(
+    const std::string& out_dir, const std::vector<BenchRunResult>& rows,
+    const std::map<std::string, RunSeries>& series) {
+  const Grid g = MakeGrid(rows);
+  CreateDirectories(out_dir + "/plots");
+  std::map<std::string, std::vector<std::string>> pngs;
+  for (const std::string& s : g.sequences) {
+    const bool variants = g.SequenceHasVariants(s);
+    if (variants) {
+      const std::string rel = "plots/" + s + "_ate_spread.png";
+      DrawSpread(g, s, out_dir + "/" + rel);
+      pngs[s].push_back(rel);
+    }
+    std::vector<ChartSeries> ate, time;
+    for (const BenchRunResult* r : ComparedRuns(g, s)) {
+      const auto it = series.find(r->run_dir);
+      if (it == series.end()) continue;
+      const std::string name = variants ? RunLabel(*r) : r->config;
+      if (!it->second.ate_m.empty()) ate.push_back({name, it->second.distance_m, it->second.ate_m});
+      if (!it->second.ms_total.empty()) {
+        time.push_back({name, it->second.frame, it->second.ms_total});
+      }
+    }
+    const std::string which = variants ? ", first run of each configuration" : "";
     if (!ate.empty()) {
       LineChartOptions o;
-      o.title = s + ": ATE along the path (aligned; se3 stereo, sim3 mono)";
+      o.title = s + ": ATE along the path (aligned; se3 stereo, sim3 mono)" + which;
       o.x_label = "distance travelled along the ground truth [m]";
       o.y_label = "ATE [m]";
       const std::string rel = "plots/" + s + "_ate.png";
       DrawLineChart(ate, o, out_dir + "/" + rel);
-      (*ate_pngs)[s] = rel;
+      pngs[s].push_back(rel);
     }
     if (!time.empty()) {
       LineChartOptions o;
-      o.title = s + ": per-frame time (total)";
+      o.title = s + ": per-frame time (total)" + which;
       o.x_label = "frame";
       o.y_label = "time [ms]";
       const std::string rel = "plots/" + s + "_time.png";
       DrawLineChart(time, o, out_dir + "/" + rel);
-      (*time_pngs)[s] = rel;
+      pngs[s].push_back(rel);
     }
   }
+  return pngs;
 }
 
 }  // namespace
@@ -450,6 +739,21 @@ std::string ResultsCsv(const std::vector<BenchRunResult>& rows) {
   return csv;
 }
 
+std::string SummaryCsv(const std::vector<BenchRunResult>& rows) {
+  std::string csv;
+  for (const SpreadColumn& c : SpreadColumns())
+    csv += (csv.empty() ? "" : ",") + std::string(c.key);
+  csv += "\n";
+  for (const SpreadSummary& s : SummarizeAte(rows)) {
+    std::string line;
+    for (size_t i = 0; i < SpreadColumns().size(); ++i) {
+      line += (i ? "," : "") + CsvField(SpreadColumns()[i].value(s));
+    }
+    csv += line + "\n";
+  }
+  return csv;
+}
+
 void WriteBenchOutputs(const std::string& out_dir, const BenchHeader& header,
                        const std::vector<BenchRunResult>& rows,
                        const std::map<std::string, RunSeries>& series) {
@@ -461,16 +765,17 @@ void WriteBenchOutputs(const std::string& out_dir, const BenchHeader& header,
   if (!header.merged_from.empty()) j["merged_from"] = header.merged_from;
   j["runs"] = nlohmann::json::array();
   for (const BenchRunResult& r : rows) j["runs"].push_back(ToJson(r));
+  j["summary"] = nlohmann::json::array();
+  for (const SpreadSummary& s : SummarizeAte(rows)) j["summary"].push_back(AteSummaryJson(s));
   WriteFileAtomically(out_dir + "/results.json",
                       [&](std::ostream& os) { os << j.dump(2) << "\n"; });
   WriteFileAtomically(out_dir + "/results.csv", [&](std::ostream& os) { os << ResultsCsv(rows); });
   WriteFileAtomically(out_dir + "/results.md",
                       [&](std::ostream& os) { os << Markdown(header, rows); });
-  std::map<std::string, std::string> ate_pngs, time_pngs;
-  DrawComparisons(out_dir, rows, series, &ate_pngs, &time_pngs);
-  WriteFileAtomically(out_dir + "/report.html", [&](std::ostream& os) {
-    os << Html(out_dir, header, rows, ate_pngs, time_pngs);
-  });
+  WriteFileAtomically(out_dir + "/summary.csv", [&](std::ostream& os) { os << SummaryCsv(rows); });
+  const auto pngs = DrawComparisons(out_dir, rows, series);
+  WriteFileAtomically(out_dir + "/report.html",
+                      [&](std::ostream& os) { os << Html(out_dir, header, rows, pngs); });
 }
 
 std::vector<BenchRunResult> ReadBenchResults(const std::string& path, BenchHeader* header) {

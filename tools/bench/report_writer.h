@@ -2,11 +2,18 @@
 #define DALA_TOOLS_BENCH_REPORT_WRITER_H_
 
 // The outputs of `dala bench` in its output folder DIR, all written atomically:
-//   results.json  {"dala_bench": 1, "suite", "shard", "runs_total", "runs": [row, ...]}
+//   results.json  {"dala_bench": 1, "suite", "shard", "runs_total", "runs": [row, ...],
+//                  "summary": [per (sequence, configuration): runs, failures, ATE median, best,
+//                  worst and which run]}
 //   results.csv   one line per run, the columns of docs/benchmarking.md
-//   results.md    side-by-side tables (sequences x configurations) and the full table
+//   summary.csv   one line per (sequence, configuration): the "summary" of results.json
+//   results.md    the spread table, the ATE of every run (when sequences have several),
+//                 side-by-side tables (sequences x configurations, medians over the runs) and
+//                 the full table
 //   report.html   static page: the tables and every plot (relative links, opens from disk)
-//   plots/SEQ_ate.png, plots/SEQ_time.png: all configurations of a sequence on one chart.
+//   plots/SEQ_ate.png, plots/SEQ_time.png: all configurations of a sequence on one chart;
+//   plots/SEQ_ate_spread.png: the ATE of every run per configuration, for a sequence with
+//   several runs per configuration (seeds, start frames).
 
 #include <map>
 #include <nlohmann/json.hpp>
@@ -37,6 +44,8 @@ std::vector<BenchRunResult> ReadBenchResults(const std::string& path, BenchHeade
 
 // The CSV text (exposed for tests).
 std::string ResultsCsv(const std::vector<BenchRunResult>& rows);
+// summary.csv: the ATE over the runs of each (sequence, configuration), tools/bench/summary.h.
+std::string SummaryCsv(const std::vector<BenchRunResult>& rows);
 
 }  // namespace dala::bench
 

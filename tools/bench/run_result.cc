@@ -21,6 +21,9 @@ void ForEachField(R& r, F&& f) {
   f("index", r.index);
   f("sequence", r.sequence);
   f("config", r.config);
+  f("variant", r.variant);
+  f("start", r.start);
+  f("seed", r.seed);
   f("estimator", r.estimator);
   f("mode", r.mode);
   f("status", r.status);
@@ -84,6 +87,10 @@ struct Reader {
 };
 
 }  // namespace
+
+std::string RunKey(const BenchRunResult& r) {
+  return (r.variant.empty() ? r.sequence : r.sequence + "@" + r.variant) + "/" + r.config;
+}
 
 nlohmann::json ToJson(const BenchRunResult& r) {
   nlohmann::json j = nlohmann::json::object();

@@ -21,15 +21,19 @@ inline constexpr const char* kStatusTimeout = "timeout";
 inline constexpr const char* kStatusUnsupported = "unsupported";
 
 struct BenchRunResult {
-  int index = 0;          // In the full sorted run list.
-  std::string sequence;   // Sequence name.
-  std::string config;     // Configuration name.
-  std::string estimator;  // "ba" | "ekf".
-  std::string mode;       // "stereo" | "mono".
-  std::string status;     // See above.
-  std::string error;      // Why a run is not ok, or why a metric is missing; empty otherwise.
-  std::string command;    // The `dala run` command line.
-  std::string run_dir;    // Relative to the bench output folder: runs/SEQ/CONFIG.
+  int index = 0;         // In the full sorted run list.
+  std::string sequence;  // Sequence name.
+  std::string config;    // Configuration name.
+  // The sequence's variant: "seed2", "start3", or empty for a sequence run once (suite.h).
+  std::string variant;
+  std::optional<int> start;  // `dala run --first_frame` of a dataset run (0 without starts).
+  std::optional<int> seed;   // The rendering seed of a rendered preset.
+  std::string estimator;     // "ba" | "ekf".
+  std::string mode;          // "stereo" | "mono".
+  std::string status;        // See above.
+  std::string error;         // Why a run is not ok, or why a metric is missing; empty otherwise.
+  std::string command;       // The `dala run` command line.
+  std::string run_dir;       // Relative to the bench output folder: runs/SEQ[@VARIANT]/CONFIG.
   std::optional<int> exit_code;
   std::optional<int> signal;
   double wall_s = 0.0;
@@ -60,6 +64,9 @@ struct BenchRunResult {
   std::string plot_trajectory;  // PlotEvaluation: top view over ground truth + ATE along path.
   std::string plot_timing;      // Per-frame time.
 };
+
+// SEQ or SEQ@VARIANT, then /CONFIG: the run's identity within a bench (and its folder under runs/).
+std::string RunKey(const BenchRunResult& r);
 
 nlohmann::json ToJson(const BenchRunResult& r);
 // Throws dala::Error naming `where` on a missing or mistyped key.

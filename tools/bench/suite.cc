@@ -83,13 +83,48 @@ void CheckName(const std::string& name, const Where& where) {
   }
 }
 
-SequenceSpec ReadSequence(const cv::FileNode& n, const Where& where, const std::string& base) {
+// Reads `starts` (a count N: 0..N-1, or a list of frames) or `seeds` (a list): ascending,
+// distinct, each >= 0. Absent leaves *values empty.
+void ReadIntList(const cv::FileNode& map, const Where& where, const char* key, bool count_allowed,
+                 std::vector<int>* values) {
+  const cv::FileNode n = map[key];
+  if (n.empty() || n.isNone()) return;
+  const Where w = where.At(key);
+  const std::string expected = count_allowed
+                                   ? "expected a count N >= 1 (frames 0..N-1) or a non-empty "
+                                     "list of frame indices >= 0, e.g. [0, 5, 10]"
+                                   : "expected a non-empty list of integers >= 0, e.g. [1, 2, 3]";
+  if (count_allowed && (n.isInt() || n.isReal())) {
+    const double v = n.real();
+    if (!(v >= 1) || v != std::floor(v) || v > 1e6) throw Error() << w.str() << ": " << expected;
+    for (int i = 0; i < static_cast<int>(v); ++i) values->push_back(i);
+    return;
+  }
+  if (!n.isSeq() || n.size() == 0) throw Error() << w.str() << ": " << expected;
+  for (size_t i = 0; i < n.size(); ++i) {
+    const cv::FileNode e = n[static_cast<int>(i)];
+    const double v = e.isInt() || e.isReal() ? e.real() : std::nan("");
+    if (!(v >= 0) || v != std::floor(v) || v > 1e9) {
+      throw Error() << w.At(i).str() << ": " << expected;
+    }
+    values->push_back(static_cast<int>(v));
+  }
+  std::sort(values->begin(), values->end());
+  const auto dup = std::adjacent_find(values->begin(), values->end());
+  if (dup != values->end()) {
+    throw Error() << w.str() << ": " << *dup << " is listed twice; each value gives one run";
+  }
+}
+
+SequenceSpec ReadSequence(const cv::FileNode& n, const Where& where, const std::string& base,
+                          std::vector<std::string>* skipped) {
   if (!n.isMap()) {
     throw Error() << where.str()
                   << ": expected a map such as {name: rover_loop, preset: rover_loop, frames: "
                      "300} or {name: kitti06, path: /data/kitti/06}";
   }
-  CheckKeys(n, where, {"name", "path", "preset", "frames", "seed", "mono"});
+  CheckKeys(n, where,
+            {"name", "path", "preset", "frames", "seed", "seeds", "mono", "starts", "optional"});
   SequenceSpec s;
   s.name = ReadString(n, where, "name", true);
   CheckName(s.name, where.At("name"));
@@ -99,17 +134,33 @@ SequenceSpec ReadSequence(const cv::FileNode& n, const Where& where, const std::
     throw Error() << where.str() << ": give exactly one of 'path' (a dataset folder) or "
                   << "'preset' (rendered with dala synth)";
   }
-  if (!path.empty()) {
-    for (const char* key : {"frames", "seed", "mono"}) {
-      if (!n[key].empty()) {
-        throw Error() << where.At(key).str() << ": only for rendered presets, not with 'path'";
-      }
+  const auto only_with = [&](std::initializer_list<const char*> keys, const char* what) {
+    for (const char* key : keys) {
+      if (!n[key].empty()) throw Error() << where.At(key).str() << ": only " << what;
     }
+  };
+  if (!path.empty()) {
+    only_with({"frames", "seed", "seeds", "mono"}, "for rendered presets, not with 'path'");
+    s.optional = ReadBool(n, where, "optional");
     s.path = Resolve(path, base);
     if (!fs::is_directory(s.path)) {
+      if (s.optional) {
+        skipped->push_back(where.str() + " (" + s.name + "): optional dataset folder " + s.path +
+                           " is absent; skipped");
+        return s;
+      }
       throw Error() << where.At("path").str() << ": dataset folder " << s.path
-                    << " does not exist (relative paths are relative to the suite file)";
+                    << " does not exist (relative paths are relative to the suite file; "
+                    << "'optional: true' skips an absent folder)";
     }
+    ReadIntList(n, where, "starts", true, &s.starts);
+  } else {
+    only_with({"starts", "optional"}, "for dataset folders ('path'), not with 'preset'");
+    if (!n["seed"].empty() && !n["seeds"].empty()) {
+      throw Error() << where.At("seeds").str()
+                    << ": give either 'seed' (one run) or 'seeds' (one run per seed), not both";
+    }
+    ReadIntList(n, where, "seeds", false, &s.seeds);
   }
   ReadInt(n, where, "frames", 0, &s.frames);
   ReadInt(n, where, "seed", 0, &s.seed);
@@ -202,11 +253,16 @@ BenchSuite LoadBenchSuite(const std::string& path) {
   const cv::FileNode sequences = top["sequences"];
   for (size_t i = 0; i < sequences.size(); ++i) {
     const Where w = where.At("sequences").At(i);
-    suite.sequences.push_back(ReadSequence(sequences[static_cast<int>(i)], w, base));
-    if (!names.insert(suite.sequences.back().name).second) {
-      throw Error() << w.At("name").str() << ": duplicate sequence name '"
-                    << suite.sequences.back().name << "'";
+    const size_t skipped = suite.skipped.size();
+    SequenceSpec s = ReadSequence(sequences[static_cast<int>(i)], w, base, &suite.skipped);
+    if (!names.insert(s.name).second) {
+      throw Error() << w.At("name").str() << ": duplicate sequence name '" << s.name << "'";
     }
+    if (suite.skipped.size() == skipped) suite.sequences.push_back(std::move(s));
+  }
+  if (suite.sequences.empty()) {
+    throw Error() << where.At("sequences").str()
+                  << ": every sequence is optional and absent; nothing to run";
   }
   names.clear();
   const cv::FileNode configurations = top["configurations"];
@@ -242,13 +298,91 @@ void AddDatasetSequence(const std::string& folder, BenchSuite* suite) {
   suite->sequences.push_back(s);
 }
 
+std::vector<int> ParseStartsFlag(const std::string& text) {
+  const std::string usage = "--starts=" + text +
+                            ": expected a count N (start frames 0..N-1) or a comma-separated "
+                            "list of start frames, e.g. 0,5,10 (one frame F: \"F,\")";
+  std::vector<int> values;
+  const bool is_list = text.find(',') != std::string::npos;
+  size_t pos = 0;
+  while (pos < text.size()) {
+    size_t end = text.find(',', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string item = text.substr(pos, end - pos);
+    pos = end + 1;
+    if (item.empty() && is_list && pos >= text.size()) break;  // "F," : a list of one.
+    size_t used = 0;
+    int v = -1;
+    try {
+      v = std::stoi(item, &used);
+    } catch (const std::exception&) {
+      throw Error() << usage;
+    }
+    if (used != item.size() || v < 0) throw Error() << usage;
+    values.push_back(v);
+  }
+  if (values.empty()) throw Error() << usage;
+  if (!is_list) {
+    if (values[0] < 1) throw Error() << usage;
+    const int count = values[0];
+    values.clear();
+    for (int i = 0; i < count; ++i) values.push_back(i);
+  }
+  std::sort(values.begin(), values.end());
+  if (std::adjacent_find(values.begin(), values.end()) != values.end()) {
+    throw Error() << "--starts=" << text << ": a start frame is listed twice";
+  }
+  return values;
+}
+
+int SetDatasetStarts(const std::vector<int>& starts, BenchSuite* suite) {
+  int changed = 0;
+  for (SequenceSpec& s : suite->sequences) {
+    if (s.is_rendered()) continue;
+    s.starts = starts;
+    ++changed;
+  }
+  return changed;
+}
+
+namespace {
+
+// The runs of one sequence under one configuration, in variant order.
+void AppendVariants(const SequenceSpec& s, const ConfigSpec& c, std::vector<BenchRun>* runs) {
+  if (!s.seeds.empty()) {
+    for (const int seed : s.seeds) {
+      BenchRun r{0, s, "seed" + std::to_string(seed), 0, c};
+      r.sequence.seed = seed;
+      r.sequence.seeds.clear();
+      runs->push_back(r);
+    }
+  } else if (!s.starts.empty()) {
+    for (const int start : s.starts) {
+      BenchRun r{0, s, "start" + std::to_string(start), start, c};
+      r.sequence.starts.clear();
+      runs->push_back(r);
+    }
+  } else {
+    runs->push_back({0, s, "", 0, c});
+  }
+}
+
+// The position of a variant in its sequence's list (seeds and starts are ascending).
+int VariantOrder(const BenchRun& r) {
+  return r.variant.empty() ? 0 : r.has_start() ? r.first_frame : r.sequence.seed;
+}
+
+}  // namespace
+
 std::vector<BenchRun> MakeRunList(const BenchSuite& suite) {
   std::vector<BenchRun> runs;
   for (const SequenceSpec& s : suite.sequences) {
-    for (const ConfigSpec& c : suite.configurations) runs.push_back({0, s, c});
+    for (const ConfigSpec& c : suite.configurations) AppendVariants(s, c, &runs);
   }
   std::sort(runs.begin(), runs.end(), [](const BenchRun& a, const BenchRun& b) {
-    return std::tie(a.sequence.name, a.config.name) < std::tie(b.sequence.name, b.config.name);
+    const int va = VariantOrder(a), vb = VariantOrder(b);
+    return std::tie(a.sequence.name, va, a.config.name) <
+           std::tie(b.sequence.name, vb, b.config.name);
   });
   for (size_t k = 0; k < runs.size(); ++k) runs[k].index = static_cast<int>(k);
   return runs;

@@ -8,12 +8,17 @@
 //   sequences:
 //     - {name: rover_loop, preset: rover_loop, frames: 1000, seed: 1}   # rendered by dala synth
 //     - {name: kitti06, path: /data/kitti/sequences/06}                 # a dataset folder
+//     - {name: flight, preset: flight, frames: 200, seeds: [1, 2, 3]}    # one run per seed
+//     - {name: k06, path: ../data/k06, starts: 10, optional: true}      # start frames 0..9
 //   configurations:
 //     - {name: ba-stereo, estimator: ba, mode: stereo}
 //     - {name: ekf-mono, estimator: ekf, mode: mono, set: ["ekf.max_landmarks=40"]}
 //
-// The run list is every sequence x configuration, sorted by (sequence, configuration) name, so
-// that run k (and with it the shard k mod n) is the same on every machine.
+// A sequence with `seeds` (rendered) or `starts` (dataset) stands for several variants, one run
+// each per configuration: the spread over start frames and seeds is what a user meets, one run
+// is a sample of it. The run list is every variant x configuration, sorted by (sequence name,
+// variant, configuration name), so that run k (and with it the shard k mod n) is the same on
+// every machine.
 
 #include <string>
 #include <vector>
@@ -27,6 +32,14 @@ struct SequenceSpec {
   int frames = 0;      // `dala synth --frames` (0: the preset's default length).
   int seed = 1;        // `dala synth --seed`.
   bool mono = false;   // `dala synth --mono` (left camera only).
+  // Rendered presets: one variant per seed (ascending, distinct); empty: `seed` alone, one run.
+  std::vector<int> seeds;
+  // Dataset folders: one variant per start frame (`dala run --first_frame`, ascending,
+  // distinct); empty: one run from the first frame.
+  std::vector<int> starts;
+  // A dataset folder that may be absent (e.g. shared data not on every clone): skipped with a
+  // note instead of an error.
+  bool optional = false;
 
   bool is_rendered() const { return !preset.empty(); }
 };
@@ -44,27 +57,50 @@ struct BenchSuite {
   double timeout_s = 0.0;  // Per run; 0 = no timeout.
   std::vector<SequenceSpec> sequences;
   std::vector<ConfigSpec> configurations;
+  // Why optional sequences were left out (absent folders), for the user to read.
+  std::vector<std::string> skipped;
 };
 
 // Reads a suite file. Relative `path` and `config` entries are relative to the suite file's
 // folder. Throws dala::Error naming the file and key ("suite.yaml: sequences[2].frames: expected
 // a positive integer") on a malformed file, an unknown key, a duplicate name, an unknown
-// estimator or mode, or a dataset folder that does not exist.
+// estimator or mode, a bad `starts`/`seeds` list, or a dataset folder that does not exist
+// (unless the sequence is `optional`: then it is left out and noted in `skipped`).
 BenchSuite LoadBenchSuite(const std::string& path);
 
 // Adds a dataset folder given on the command line (`--dataset PATH`) as a sequence named after
 // the folder. Throws dala::Error when it does not exist or its name is already taken.
 void AddDatasetSequence(const std::string& folder, BenchSuite* suite);
 
-// One run: a sequence under a configuration.
+// Parses the `--starts` flag: "N" is a count (start frames 0..N-1), "a,b,c" a list (one start
+// frame F: "F,"). Throws dala::Error naming the flag.
+std::vector<int> ParseStartsFlag(const std::string& text);
+
+// Sets the start frames of every dataset sequence (`--starts`). Returns how many it changed.
+int SetDatasetStarts(const std::vector<int>& starts, BenchSuite* suite);
+
+// One run: a variant of a sequence (a seed or a start frame) under a configuration.
 struct BenchRun {
   int index = 0;  // Position in the full sorted run list.
+  // The variant's sequence: for a seed variant, `seed` is that seed and `seeds` is cleared.
   SequenceSpec sequence;
+  // "seed2", "start3", or empty for a sequence without `seeds`/`starts`. Its folders are
+  // NAME@VARIANT ('@' is not allowed in names, so the split is unambiguous).
+  std::string variant;
+  int first_frame = 0;  // `dala run --first_frame` when the variant is a start frame.
   ConfigSpec config;
-  std::string key() const { return sequence.name + "/" + config.name; }
+
+  // NAME or NAME@VARIANT: the folder under DIR/runs (and DIR/sequences for a rendered preset).
+  std::string folder_name() const { return VariantFolderName(sequence.name, variant); }
+  std::string key() const { return folder_name() + "/" + config.name; }
+  bool has_start() const { return variant.rfind("start", 0) == 0; }
+  static std::string VariantFolderName(const std::string& name, const std::string& variant) {
+    return variant.empty() ? name : name + "@" + variant;
+  }
 };
 
-// Every sequence x configuration, sorted by (sequence name, configuration name).
+// Every variant x configuration, sorted by (sequence name, variant: seeds and starts in
+// ascending order, configuration name).
 std::vector<BenchRun> MakeRunList(const BenchSuite& suite);
 
 // A shard "i/n" (0 <= i < n) of the run list.

@@ -82,7 +82,9 @@ class BenchCli : public ::testing::Test {
   static std::map<std::string, nlohmann::json> ByKey(const nlohmann::json& results) {
     std::map<std::string, nlohmann::json> runs;
     for (const auto& r : results.at("runs")) {
-      runs[r.at("sequence").get<std::string>() + "/" + r.at("config").get<std::string>()] = r;
+      const std::string variant = r.value("variant", "");
+      runs[r.at("sequence").get<std::string>() + (variant.empty() ? "" : "@" + variant) + "/" +
+           r.at("config").get<std::string>()] = r;
     }
     return runs;
   }
@@ -167,8 +169,8 @@ TEST_F(BenchCli, RecordsMetricsOfEveryRunAndItsFailures) {
   // CSV: header + one line per run (the errors span lines inside quotes, so count records by
   // the sequence name at a line start).
   const std::string csv = ReadText(out + "/results.csv");
-  EXPECT_EQ(csv.rfind("sequence,config,estimator,mode,status,ate_rmse,", 0), 0u);
-  EXPECT_THAT(csv, HasSubstr("square_a,ba-stereo,ba,stereo,ok,0.1000,"));
+  EXPECT_EQ(csv.rfind("sequence,config,variant,start,seed,estimator,mode,status,ate_rmse,", 0), 0u);
+  EXPECT_THAT(csv, HasSubstr("square_a,ba-stereo,,,1,ba,stereo,ok,0.1000,"));
   const std::string md = ReadText(out + "/results.md");
   EXPECT_THAT(md, HasSubstr("| sequence | ba-mono | ba-stereo | crashes | ekf-mono | ekf-stereo "
                             "| fails |"));
@@ -325,6 +327,204 @@ TEST_F(BenchCli, AddsDatasetFoldersFromTheCommandLine) {
   EXPECT_NEAR(runs.at("mydata/ba-stereo")["ate_rmse"].get<double>(), 0.1, 1e-6);
   EXPECT_THAT(runs.at("mydata/ba-stereo")["command"].get<std::string>(),
               HasSubstr(" run " + data + " --out "));
+}
+
+// A KITTI-like folder with ground truth of `frames` frames, as `dala synth` writes (made by the
+// fake), at dir/name.
+std::string MakeDataset(const testing::TempDir& dir, const std::string& fake,
+                        const std::string& name, int frames) {
+  fs::create_directories(dir / "gen/sequences");
+  const std::string synth = fake + " synth --out " + (dir / "gen/sequences/x") + " --frames " +
+                            std::to_string(frames) + " >/dev/null";
+  EXPECT_EQ(std::system(synth.c_str()), 0);
+  fs::rename(dir / "gen/sequences/x", dir / name);
+  return dir / name;
+}
+
+// Rendered seeds and dataset start frames: one run each, the spread over them in the tables.
+class BenchVariantsCli : public BenchCli {
+ protected:
+  void SetUp() override {
+    BenchCli::SetUp();
+    data_ = MakeDataset(dir_, fake_, "clip", 80);
+    // Starts that are multiples of 4 keep the fake's ATE exact: 0.1 + 0.01 F m. Seeds: the fake
+    // adds 0.05 m per seed above 1 under fake.seed_error=1. fake.fail_start=8 fails start 8.
+    std::ofstream(suite_) << "sequences:\n"
+                             "  - {name: clip, path: clip, starts: [8, 0, 4]}\n"
+                             "  - {name: gone, path: no/such/folder, starts: 3, optional: true}\n"
+                             "  - {name: scene, preset: flight, frames: 80, seeds: [1, 2, 3]}\n"
+                             "configurations:\n"
+                             "  - {name: ba-stereo, estimator: ba, mode: stereo, "
+                             "set: [\"fake.seed_error=1\", \"fake.fail_start=8\"]}\n"
+                             "  - {name: ekf-mono, estimator: ekf, mode: mono}\n";
+  }
+  std::string data_;
+};
+
+TEST_F(BenchVariantsCli, RunsEverySeedAndStartAndSummarisesTheirSpread) {
+  const std::string out = dir_ / "out";
+  const CliResult r = BenchSuite(out, "--jobs 2");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("sequences[1] (gone): optional dataset folder "));
+  EXPECT_THAT(r.err, HasSubstr("is absent; skipped"));
+  EXPECT_THAT(r.err, HasSubstr("[12/12]"));
+
+  const nlohmann::json results = Results(out);
+  EXPECT_EQ(results["runs_total"], 12);
+  const auto runs = ByKey(results);
+  ASSERT_EQ(runs.size(), 12u);
+  // Run order: sequence, variant (numeric), configuration.
+  std::vector<std::string> order;
+  for (const auto& run : results["runs"]) {
+    order.push_back(run["sequence"].get<std::string>() + "@" + run["variant"].get<std::string>());
+  }
+  EXPECT_EQ(order[0], "clip@start0");
+  EXPECT_EQ(order[2], "clip@start4");
+  EXPECT_EQ(order[4], "clip@start8");
+  EXPECT_EQ(order[6], "scene@seed1");
+  EXPECT_EQ(order[11], "scene@seed3");
+
+  // Dataset starts: --first_frame F, the folder runs/clip@startF, the fake's ATE 0.1 + 0.01 F.
+  const nlohmann::json& start4 = runs.at("clip@start4/ba-stereo");
+  EXPECT_EQ(start4["status"], "ok");
+  EXPECT_EQ(start4["start"], 4);
+  EXPECT_TRUE(start4["seed"].is_null());
+  EXPECT_EQ(start4["run_dir"], "runs/clip@start4/ba-stereo");
+  EXPECT_THAT(start4["command"].get<std::string>(), HasSubstr(" --first_frame 4"));
+  EXPECT_NEAR(start4["ate_rmse"].get<double>(), 0.14, 1e-6);
+  EXPECT_EQ(start4["frames"], 76);
+  EXPECT_THAT(runs.at("clip@start0/ba-stereo")["command"].get<std::string>(),
+              HasSubstr(" --first_frame 0"));
+  EXPECT_EQ(runs.at("clip@start8/ba-stereo")["status"], "failed");
+  // Seeds: each rendered once into sequences/scene@seedS, and run there.
+  const nlohmann::json& seed3 = runs.at("scene@seed3/ba-stereo");
+  EXPECT_EQ(seed3["seed"], 3);
+  EXPECT_NEAR(seed3["ate_rmse"].get<double>(), 0.2, 1e-6);
+  EXPECT_THAT(seed3["command"].get<std::string>(), HasSubstr("/sequences/scene@seed3 --out "));
+  EXPECT_THAT(seed3["command"].get<std::string>(), ::testing::Not(HasSubstr("--first_frame")));
+  EXPECT_EQ(CountLines(out + "/synth_calls.txt"), 3);
+  for (const char* seed : {"1", "2", "3"}) {
+    EXPECT_THAT(ReadText(out + "/sequences/scene@seed" + std::string(seed) + "/synth.yaml"),
+                HasSubstr(std::string("seed: ") + seed));
+  }
+
+  // The summary: runs, failures, median, best and worst with the run that gave them.
+  std::map<std::string, nlohmann::json> summary;
+  for (const auto& s : results["summary"]) {
+    summary[s["sequence"].get<std::string>() + "/" + s["config"].get<std::string>()] = s;
+  }
+  ASSERT_EQ(summary.size(), 4u);
+  const nlohmann::json& clip = summary.at("clip/ba-stereo");
+  EXPECT_EQ(clip["runs"], 3);
+  EXPECT_EQ(clip["ok"], 2);
+  EXPECT_EQ(clip["not_ok"], 1);
+  EXPECT_EQ(clip["not_ok_runs"], nlohmann::json::array({"start8: failed"}));
+  EXPECT_NEAR(clip["ate_median"].get<double>(), 0.12, 1e-6);  // Of 0.10 and 0.14.
+  EXPECT_NEAR(clip["ate_worst"].get<double>(), 0.14, 1e-6);
+  EXPECT_EQ(clip["ate_worst_variant"], "start4");
+  EXPECT_EQ(clip["ate_best_variant"], "start0");
+  const nlohmann::json& scene = summary.at("scene/ba-stereo");
+  EXPECT_EQ(scene["runs"], 3);
+  EXPECT_EQ(scene["not_ok"], 0);
+  EXPECT_NEAR(scene["ate_median"].get<double>(), 0.15, 1e-6);
+  EXPECT_EQ(scene["ate_worst_variant"], "seed3");
+  EXPECT_EQ(scene["ate_best_variant"], "seed1");
+
+  const std::string md = ReadText(out + "/results.md");
+  EXPECT_THAT(md, HasSubstr("| sequence | config | runs | failed | ATE median [m] | best [m] | "
+                            "best run | worst [m] | worst run | failed runs |"));
+  EXPECT_THAT(md, HasSubstr("| clip | ba-stereo | 3 | 1 | 0.1200 | 0.1000 | start0 | 0.1400 | "
+                            "start4 | start8: failed |"));
+  EXPECT_THAT(md, HasSubstr("| scene | ba-stereo | 3 | 0 | 0.1500 | 0.1000 | seed1 | 0.2000 | "
+                            "seed3 |  |"));
+  // Every run's ATE, and the medians side by side with the failures counted.
+  EXPECT_THAT(md, HasSubstr("| clip | start8 | failed | "));
+  EXPECT_THAT(md, HasSubstr("| clip | 0.1200 (1/3 failed) | "));
+  EXPECT_EQ(ReadText(out + "/summary.csv").rfind("sequence,config,runs,not_ok,ate_median,", 0), 0u);
+  EXPECT_THAT(ReadText(out + "/summary.csv"),
+              HasSubstr("clip,ba-stereo,3,1,0.1200,0.1000,start0,0.1400,start4,start8: failed\n"));
+
+  // The report draws the spread of each sequence and links only existing files.
+  const std::string html = ReadText(out + "/report.html");
+  EXPECT_THAT(html, HasSubstr("src=\"plots/clip_ate_spread.png\""));
+  EXPECT_THAT(html, HasSubstr("src=\"plots/scene_ate_spread.png\""));
+  EXPECT_THAT(html, HasSubstr("src=\"runs/clip@start4/ba-stereo/eval.png\""));
+  EXPECT_THAT(html, HasSubstr("ba-stereo @ start8"));
+  const std::regex src("src=\"([^\"]+)\"");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), src); it != std::sregex_iterator();
+       ++it) {
+    EXPECT_TRUE(fs::is_regular_file(out + "/" + std::string((*it)[1]))) << (*it)[1];
+  }
+}
+
+TEST_F(BenchVariantsCli, StartsFlagSetsTheStartsOfEveryDatasetSequence) {
+  const std::string other = MakeDataset(dir_, fake_, "other", 40);
+  const std::string out = dir_ / "out";
+  const CliResult r = BenchSuite(out, "--dataset " + other + " --starts 0,4");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto runs = ByKey(Results(out));
+  // clip: 2 starts (the suite's 3 overridden), other: 2 starts, scene: 3 seeds; x 2 configs.
+  EXPECT_EQ(runs.size(), (2u + 2u + 3u) * 2u);
+  EXPECT_TRUE(runs.count("clip@start4/ekf-mono"));
+  EXPECT_FALSE(runs.count("clip@start8/ba-stereo"));
+  EXPECT_NEAR(runs.at("other@start4/ba-stereo")["ate_rmse"].get<double>(), 0.14, 1e-6);
+  EXPECT_EQ(runs.at("other@start4/ba-stereo")["frames"], 36);
+
+  const CliResult count = BenchSuite(dir_ / "out3", "--starts 3");
+  ASSERT_EQ(count.status, 0) << count.err;
+  const auto three = ByKey(Results(dir_ / "out3"));
+  for (const char* key :
+       {"clip@start0/ba-stereo", "clip@start1/ba-stereo", "clip@start2/ba-stereo"}) {
+    EXPECT_TRUE(three.count(key)) << key;
+  }
+  EXPECT_EQ(three.size(), (3u + 3u) * 2u);
+
+  const CliResult bad = BenchSuite(dir_ / "bad", "--starts 0,-4");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_THAT(bad.err, HasSubstr("--starts=0,-4: expected a count N"));
+}
+
+TEST_F(BenchVariantsCli, ShardsOfVariantsMergeIntoTheOneMachineResults) {
+  const std::string whole = dir_ / "whole";
+  ASSERT_EQ(BenchSuite(whole, "--jobs 2").status, 0);
+  std::string dirs;
+  std::set<std::string> seen;
+  for (int i = 0; i < 5; ++i) {
+    const std::string out = dir_ / ("part" + std::to_string(i));
+    const CliResult r = BenchSuite(out, "--shard " + std::to_string(i) + "/5");
+    ASSERT_EQ(r.status, 0) << r.err;
+    for (const auto& [key, run] : ByKey(Results(out))) {
+      EXPECT_EQ(run["index"].get<int>() % 5, i);
+      EXPECT_TRUE(seen.insert(key).second) << key << " in two shards";
+    }
+    dirs += " " + out;
+  }
+  EXPECT_EQ(seen.size(), 12u);
+  const std::string merged = dir_ / "merged";
+  const CliResult m = Bench("merge" + dirs + " --out " + merged);
+  ASSERT_EQ(m.status, 0) << m.err;
+
+  // results.json: identical but for what differs between two executions of the same run
+  // (times, memory, the absolute paths in commands and errors) and the merge's provenance.
+  nlohmann::json a = Results(whole), b = Results(merged);
+  for (nlohmann::json* j : {&a, &b}) {
+    for (const char* key : {"merged_from", "suite"}) j->erase(key);
+    for (auto& run : (*j)["runs"]) {
+      for (const char* key : {"wall_s", "peak_rss_mb", "command", "error"}) run.erase(key);
+    }
+  }
+  EXPECT_EQ(a.dump(1), b.dump(1));
+  ASSERT_EQ(a["summary"].size(), 4u);
+  // The spread table and the per-run ATE are byte-identical (no time or path in them).
+  EXPECT_EQ(ReadText(whole + "/summary.csv"), ReadText(merged + "/summary.csv"));
+  const auto section = [](const std::string& md) {
+    const size_t from = md.find("## ATE RMSE over the runs");
+    return md.substr(from, md.find("## ATE RMSE [m], median") - from);
+  };
+  EXPECT_EQ(section(ReadText(whole + "/results.md")), section(ReadText(merged + "/results.md")));
+  EXPECT_THAT(section(ReadText(merged + "/results.md")), HasSubstr("| clip | start8 | failed |"));
+  EXPECT_TRUE(fs::exists(merged + "/runs/scene@seed2/ba-stereo/eval.png"));
+  EXPECT_TRUE(fs::exists(merged + "/plots/scene_ate_spread.png"));
 }
 
 TEST_F(BenchCli, ClearErrors) {

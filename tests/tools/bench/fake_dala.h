@@ -7,14 +7,18 @@
 //    poses.txt, calib.txt, synth.yaml) whose path is a 40 m square, 2 m per frame (20 frames a
 //    side), identity orientations. Each call appends a line to DIR/../../synth_calls.txt.
 //    --preset broken: exit 2 with a message.
-//  - run SEQ --out RUNDIR --estimator E --mode M [--set k=v]...: trajectory.txt (TUM) = ground
-//    truth with a known error, report.json with per-frame times 10 + (i % 10) ms; appends
-//    "run E M" to RUNDIR/../../../run_calls.txt.
-//      stereo: z offset d * (+1, -1, -1, +1, ...), d = 0.1 m. Over blocks of 4 frames on one side
-//        of the square this offset is orthogonal to the path (sum s_i = 0 and sum s_i p_i = 0),
-//        so the SE(3) alignment is the identity and every ATE error is exactly 0.1 m.
+//  - run SEQ --out RUNDIR --estimator E --mode M [--first_frame F] [--set k=v]...:
+//    trajectory.txt (TUM) = ground truth of frames F.. with a known error, report.json with
+//    per-frame times 10 + (i % 10) ms; appends "run E M F" to RUNDIR/../../../run_calls.txt.
+//      stereo: z offset d * (+1, -1, -1, +1, ...) by frame index, d = 0.1 + 0.01 F m. Over blocks
+//        of 4 frames on one side of the square this offset is orthogonal to the path (sum s_i = 0
+//        and sum s_i p_i = 0), so for F a multiple of 4 the SE(3) alignment is the identity and
+//        every ATE error is exactly d.
+//      --set fake.seed_error=1: d grows by 0.05 m per seed above 1 (the seed in SEQ/synth.yaml),
+//        so that the seeds of a rendered preset give different ATEs.
 //      mono: positions doubled: Sim(3) aligns them exactly (ATE 0, scale 0.5).
-//    --set fake.fail=1: exit 1 with a message; fake.crash=1: kill -SEGV itself;
+//    --set fake.fail=1: exit 1 with a message; fake.fail_start=F: the same when started at F;
+//    fake.crash=1: kill -SEGV itself;
 //    fake.sleep=S: sleep S seconds first; ba with mono: exit 2 "... is not supported".
 
 namespace dala::testing {
@@ -41,14 +45,19 @@ if [ "$cmd" = synth ]; then
 fi
 [ "$cmd" = run ] || { echo "fake dala: unknown command $cmd" >&2; exit 2; }
 seq=$1; shift
-out=""; est=""; mode=""; fail=0; crash=0; sleep_s=0
+out=""; est=""; mode=""; fail=0; crash=0; sleep_s=0; first=0; fail_start=-1; seed_error=0
 while [ $# -gt 0 ]; do
   case $1 in --out) out=$2; shift;; --estimator) est=$2; shift;; --mode) mode=$2; shift;;
+    --first_frame) first=$2; shift;;
     --set) case $2 in fake.fail=1) fail=1;; fake.crash=1) crash=1;;
+                      fake.fail_start=*) fail_start=${2#fake.fail_start=};;
+                      fake.seed_error=1) seed_error=1;;
                       fake.sleep=*) sleep_s=${2#fake.sleep=};; esac; shift;;
   esac; shift
 done
-echo "run $est $mode" >> "$out/../../../run_calls.txt"
+echo "run $est $mode $first" >> "$out/../../../run_calls.txt"
+[ "$first" = "$fail_start" ] && fail=1
+seed=$(awk '/^seed:/ { print $2 }' "$seq/synth.yaml" 2>/dev/null); seed=${seed:-1}
 echo "fake dala run: $est $mode on $seq"
 if [ $fail = 1 ]; then echo "error: the fake estimator diverged" >&2; exit 1; fi
 if [ $crash = 1 ]; then kill -SEGV $$; fi
@@ -56,12 +65,13 @@ if [ "$sleep_s" != 0 ]; then sleep "$sleep_s"; fi
 if [ "$est" = ba ] && [ "$mode" = mono ]; then
   echo "dala run: error: --estimator ba with --mode mono is not supported" >&2; exit 2
 fi
-paste -d' ' "$seq/times.txt" "$seq/poses.txt" | awk -v mono=$([ "$mode" = mono ] && echo 1 || echo 0) '{
+d=$(awk -v f=$first -v s=$seed -v e=$seed_error 'BEGIN { printf "%.6f", 0.1 + 0.01 * f + (e ? 0.05 * (s - 1) : 0) }')
+paste -d' ' "$seq/times.txt" "$seq/poses.txt" | awk -v mono=$([ "$mode" = mono ] && echo 1 || echo 0) -v first=$first -v d=$d 'NR > first {
   i = NR - 1; k = i % 4; s = (k == 0 || k == 3) ? 1 : -1;
   if (mono) printf "%s %.6f %.6f %.6f 0 0 0 1\n", $1, 2 * $5, 2 * $9, 2 * $13;
-  else printf "%s %.6f %.6f %.6f 0 0 0 1\n", $1, $5, $9, $13 + 0.1 * s }' > "$out/trajectory.txt.tmp"
+  else printf "%s %.6f %.6f %.6f 0 0 0 1\n", $1, $5, $9, $13 + d * s }' > "$out/trajectory.txt.tmp"
 mv "$out/trajectory.txt.tmp" "$out/trajectory.txt"
-n=$(wc -l < "$seq/times.txt")
+n=$(( $(wc -l < "$seq/times.txt") - first ))
 awk -v n=$n -v est=$est -v mode=$mode 'BEGIN {
   printf "{\"dataset\": {\"path\": \"x\", \"format\": \"synthetic\", \"frames\": %d, \"stereo\": true},\n", n
   printf " \"estimator\": \"%s\", \"mode\": \"%s\", \"options\": {},\n \"frames\": [", est, mode

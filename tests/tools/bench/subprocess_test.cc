@@ -120,7 +120,7 @@ TEST(ResultsCsv, QuotesFieldsWithCommasQuotesAndNewlines) {
   r.error = "exit 1: \"bad\", really\nsecond line";
   r.ate_rmse = 0.123456;
   const std::string csv = ResultsCsv({r});
-  EXPECT_THAT(csv, HasSubstr("s,c,,,failed,0.1235,"));
+  EXPECT_THAT(csv, HasSubstr("s,c,,,,,,failed,0.1235,"));
   EXPECT_THAT(csv, HasSubstr(",\"exit 1: \"\"bad\"\", really\nsecond line\"\n"));
 }
 
