@@ -62,6 +62,11 @@ System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), 
 TrackResult System::Track(const Frame& frame) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
+  if (!stats_.empty() && frame.t_ns < stats_.back().t_ns) {
+    throw Error() << "frame " << frame.id.value << " at t_ns " << frame.t_ns
+                  << " comes before the previous frame (t_ns " << stats_.back().t_ns
+                  << "): give System::Track the frames in time order";
+  }
   FrameMeasurement m = frontend_->Process(frame);
   if (options_.use_odometry && frame.T_w_odom && T_w_odom_prev_) {
     // Odometry between the previous frame and this one (SystemOptions::use_odometry).

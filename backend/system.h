@@ -73,6 +73,9 @@ class System {
   // (stereo mode on a monocular dataset).
   System(const StereoRig& rig, const SystemOptions& options);
 
+  // Tracks the next frame. Throws dala::Error, with nothing changed, on the caller's mistakes: a
+  // frame before the previous one in time, an image that is empty, not 8-bit grey, or not of
+  // the rig's size (CheckFrameSuitsRig, frontend/frontend.h).
   TrackResult Track(const Frame& frame);
   // Records a frame whose images could not be read (dala run skips such a frame): stats() report
   // it lost with `note`, and it gets no pose. Neither the frontend nor the estimator sees it: the
@@ -83,8 +86,9 @@ class System {
 
   // After the last frame of an offline run (`dala run` calls it): the estimator's global
   // refinement when it has one (the BA estimator: a global bundle adjustment over every
-  // keyframe, backend/ba/global_ba.h, when options.ba.final_ba says so: by default after a run
-  // that closed a loop); trajectory(), map() and the saved map then give the refined estimates.
+  // keyframe, backend/ba/global_ba.h, when options.ba.final_ba says so: by default for a stereo
+  // rig whose disparity offset was calibrated online); trajectory(), map() and the saved map
+  // then give the refined estimates.
   // Otherwise nothing changes (done = false, `report` says why). Frames may still be tracked
   // after it.
   RefinementSummary Finish();

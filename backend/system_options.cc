@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <utility>
@@ -305,8 +306,11 @@ class Setter : public OptionVisitor {
     if (!Match(s, k)) return;
     char* end = nullptr;
     errno = 0;
-    const long x = std::strtol(value_.c_str(), &end, 10);
+    const long long x = std::strtoll(value_.c_str(), &end, 10);
     if (value_.empty() || *end != '\0' || errno) Bad("an integer");
+    if (x < std::numeric_limits<int>::min() || x > std::numeric_limits<int>::max()) {
+      Bad("an integer from -2147483648 to 2147483647");
+    }
     *v = static_cast<int>(x);
   }
   void Field(const std::string& s, const std::string& k, bool* v) override {

@@ -9,6 +9,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/error.h"
+
 namespace dala {
 namespace {
 
@@ -372,11 +374,30 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
   return match->loop;
 }
 
+void CheckFrameSuitsRig(const Frame& frame, const StereoRig& rig) {
+  const auto check = [&](const cv::Mat& image, const char* which) {
+    if (image.empty()) {
+      throw Error() << "frame " << frame.id.value << ": the " << which << " image is empty";
+    }
+    if (image.type() != CV_8UC1) {
+      throw Error() << "frame " << frame.id.value << ": the " << which << " image is "
+                    << cv::typeToString(image.type())
+                    << "; dala takes 8-bit grey images (CV_8UC1): convert it first, e.g. "
+                       "cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY)";
+    }
+    if (image.cols != rig.left.width || image.rows != rig.left.height) {
+      throw Error() << "frame " << frame.id.value << ": the " << which << " image is " << image.cols
+                    << "x" << image.rows << " pixels, the rig's calibration " << rig.left.width
+                    << "x" << rig.left.height
+                    << ": an image of another camera, or a calibration for another resolution";
+    }
+  };
+  check(frame.left, "left");
+  if (rig.is_stereo() && !frame.right.empty()) check(frame.right, "right");
+}
+
 FrameMeasurement Frontend::Process(const Frame& frame) {
-  CHECK_EQ(frame.left.type(), CV_8UC1) << "Frontend::Process expects 8-bit grey images";
-  CHECK(frame.left.cols == rig_.left.width && frame.left.rows == rig_.left.height)
-      << "image size " << frame.left.cols << "x" << frame.left.rows << " differs from the rig's "
-      << rig_.left.width << "x" << rig_.left.height;
+  CheckFrameSuitsRig(frame, rig_);
   const bool stereo = rig_.is_stereo() && !frame.right.empty();
   const auto t_start = Clock::now();
   FrameMeasurement out;

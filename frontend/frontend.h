@@ -81,12 +81,17 @@ struct FrontendOptions {
   bool IsValid(std::string* why) const;
 };
 
+// Throws dala::Error naming the frame, the image and the fix when the caller's frame cannot be
+// processed with `rig`: an empty or non-8-bit-grey left image, a left or right image whose size
+// is not the calibration's. (A right image on a monocular rig is ignored, not an error.)
+void CheckFrameSuitsRig(const Frame& frame, const StereoRig& rig);
+
 class Frontend {
  public:
   Frontend(const StereoRig& rig, const FrontendOptions& options);
 
   // Processes the next frame (frames in time order). Images must be CV_8UC1 and of the rig's
-  // size (CHECK: the dataset readers validate at the I/O boundary).
+  // size: CheckFrameSuitsRig throws dala::Error otherwise, before anything changes.
   FrameMeasurement Process(const Frame& frame);
 
   // Pose of the current camera obtained by chaining the visual motion estimates from the first

@@ -56,5 +56,19 @@ TEST(SystemOptions, AKnownDisparityOffsetIsReadAndChecked) {
   EXPECT_NE(error.find("10 px"), std::string::npos) << error;
 }
 
+// An integer that does not fit the option is an error naming the key, never a wrapped value
+// (4294967304 = 2^32 + 8 would become 8).
+TEST(SystemOptions, AnIntegerOutOfRangeIsAnError) {
+  SystemOptions options;
+  for (const char* assignment : {"ba.window_size=4294967304", "motion.seed=-4294967304",
+                                 "ba.window_size=99999999999999999999", "ba.window_size=8.5"}) {
+    const std::string error = ErrorOf([&] { SetSystemOption(assignment, &options); });
+    const std::string key = std::string(assignment).substr(0, std::string(assignment).find('='));
+    EXPECT_NE(error.find(key), std::string::npos) << assignment << ": " << error;
+    EXPECT_NE(error.find("integer"), std::string::npos) << assignment << ": " << error;
+  }
+  EXPECT_EQ(options.ba.ba.window_size, SystemOptions().ba.ba.window_size) << "left unchanged";
+}
+
 }  // namespace
 }  // namespace dala
