@@ -1,14 +1,19 @@
 # The two commands of the README:
 #   make run   installs what is missing, builds, and runs the main job on the embedded default
-#   make test  installs what is missing, builds, and runs the whole test suite (CI calls this)
+#   make test  installs what is missing (and the test-only packages: test-deps), builds, and runs
+#              the whole test suite (CI calls this)
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 OUT ?= out
 
-.PHONY: deps configure build test run clean
+.PHONY: deps test-deps configure build test run clean
 
 deps:
 	@bash scripts/install_deps.sh
+
+# Test-only packages (a local Slurm for the bench job array test), not needed by make run.
+test-deps:
+	@bash scripts/install_deps.sh --test
 
 configure: deps
 	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
@@ -16,7 +21,7 @@ configure: deps
 build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
-test: build
+test: build test-deps
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 run: build

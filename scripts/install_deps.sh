@@ -1,11 +1,24 @@
 #!/usr/bin/env bash
 # Installs dala's build dependencies from Debian packages. Idempotent: packages that are already
 # installed are skipped, and apt-get is not touched at all when nothing is missing.
+#   scripts/install_deps.sh          the build (make run, make build)
+#   scripts/install_deps.sh --test   only what the tests need besides the build (make test): a
+#                                    single-node Slurm for the bench job array test
+#                                    (tests/tools/bench/slurm_bench_test.cc)
 set -euo pipefail
-PACKAGES=(cmake make g++ ccache pkg-config
-  libceres-dev libeigen3-dev libopencv-dev libsuitesparse-dev
-  libgflags-dev libgoogle-glog-dev libgtest-dev libgmock-dev libbenchmark-dev
-  nlohmann-json3-dev)
+case "${1:-}" in
+  "")
+    PACKAGES=(cmake make g++ ccache pkg-config
+      libceres-dev libeigen3-dev libopencv-dev libsuitesparse-dev
+      libgflags-dev libgoogle-glog-dev libgtest-dev libgmock-dev libbenchmark-dev
+      nlohmann-json3-dev)
+    WHAT="packages" ;;
+  --test)
+    PACKAGES=(slurm-wlm munge)
+    WHAT="test packages" ;;
+  *)
+    echo "usage: $0 [--test]" >&2; exit 2 ;;
+esac
 missing=()
 for p in "${PACKAGES[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
@@ -13,7 +26,7 @@ for p in "${PACKAGES[@]}"; do
   fi
 done
 if [ ${#missing[@]} -eq 0 ]; then
-  echo "[deps] all ${#PACKAGES[@]} packages present"
+  echo "[deps] all ${#PACKAGES[@]} $WHAT present"
   exit 0
 fi
 echo "[deps] installing: ${missing[*]}"
