@@ -251,13 +251,6 @@ SavedMap MapWithoutKeyframes(const std::vector<SavedKeyframe>& keyframes,
 
 }  // namespace
 
-SavedMap System::MapSnapshot() const {
-  SavedMap map = MapWithoutKeyframes(keyframe_records_, estimator_->map(), options_,
-                                     ScaleDescription().rfind("metric", 0) == 0);
-  map.keyframes = keyframes();
-  return map;
-}
-
 void System::SaveMap(const std::string& path) const {
   const std::vector<MapPoint> points = estimator_->map();
   PruneKeyframeRecords(points);

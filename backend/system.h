@@ -107,9 +107,8 @@ class System {
   // Places the place recognition stores (one per keyframe, but one per place on revisits).
   size_t places() const { return frontend_->place_recognition().database().size(); }
 
-  // The map as saved: keyframes (poses, points, descriptors) and landmarks (core/io/map_file.h
+  // Writes the map: keyframes (poses, points, descriptors) and landmarks (core/io/map_file.h
   // gives the versioned binary format). Throws dala::Error when the file cannot be written.
-  SavedMap MapSnapshot() const;
   void SaveMap(const std::string& path) const;
   // Reads a map written by SaveMap (dala::Error on a missing, foreign, corrupted or other-version
   // file). The map is returned for use (inspection, or UseMap to run in it).

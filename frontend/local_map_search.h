@@ -51,9 +51,9 @@ struct LocalMap {
 
 struct LocalMapSearchOptions {
   bool enable = true;
-  // Stereo runs too, from the first frame (configs/kitti.yaml). Off by default: it helps fast
-  // motion (KITTI, the rendered `fast`) but not the slow rendered presets, and costs time
-  // (docs/results.md); stereo_when_tracked_below turns it on where it helps.
+  // Stereo runs too, from the first frame. Off by default: it helps fast motion (KITTI, the
+  // rendered `fast`) but not the slow rendered presets, and costs time (docs/results.md);
+  // stereo_when_tracked_below turns it on where it helps.
   bool stereo = false;
   // Stereo runs turn it on by themselves while the frame-to-frame tracks break: when the mean
   // fraction of a frame's points that continue a track (exponential mean over ~5 frames, before

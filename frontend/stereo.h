@@ -52,7 +52,8 @@ struct StereoOptions {
   // Depth is kept only for points nearer than this many baselines (and max_depth_m); see the
   // comment above. 0: no limit (the default: an exact rig, as rendered, loses accuracy with
   // the limit: small_loop at 480x320 0.031 -> 0.148 m ATE). Real rigs with calibration
-  // residuals set it per camera, as ORB-SLAM2's ThDepth: configs/kitti.yaml has 45 (24 m).
+  // residuals whose disparity offset is not calibrated (ba.calibrate_disparity_offset off) can
+  // set it per camera, as ORB-SLAM2's ThDepth (45 baselines is 24 m on KITTI's rig).
   double max_depth_baselines = 0.0;
   // ...unless fewer points than this are nearer: then the nearest far points keep their depth
   // until this many have one (the visual motion needs 3D-2D correspondences; a wide open place

@@ -2,11 +2,12 @@
 #define DALA_TESTS_TEST_UTIL_H_
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "core/geometry.h"
@@ -22,6 +23,14 @@ inline bool HaveSharedData(const std::string& sub) {
   if (!::dala::testing::HaveSharedData(sub))                                                  \
   GTEST_SKIP() << "shared data '" << ::dala::testing::SharedDataDir() << "/" << (sub)         \
                << "' is absent (it sits beside the project as ../shared/data); skipping"
+
+// The whole file as a string ("" when it cannot be read).
+inline std::string ReadAll(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
 
 // A fresh temporary folder per test, removed at the end.
 class TempDir {

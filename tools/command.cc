@@ -55,8 +55,6 @@ void PrintCommandHelp(const Command& command, std::ostream& os) {
 
 CommandRegistrar::CommandRegistrar(const Command& command) { Registry().push_back(command); }
 
-const std::vector<Command>& RegisteredCommands() { return Registry(); }
-
 int RunCli(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h" ||
       std::string(argv[1]) == "help") {

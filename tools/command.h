@@ -28,8 +28,6 @@ class CommandRegistrar {
   explicit CommandRegistrar(const Command& command);
 };
 
-const std::vector<Command>& RegisteredCommands();
-
 // Runs the CLI; used by main() and by tests that call the CLI in-process.
 int RunCli(int argc, char** argv);
 

@@ -14,16 +14,4 @@ std::unique_ptr<ceres::LossFunction> MakeLoss(RobustLoss loss, double scale) {
   return nullptr;
 }
 
-const char* RobustLossName(RobustLoss loss) {
-  switch (loss) {
-    case RobustLoss::kHuber:
-      return "huber";
-    case RobustLoss::kCauchy:
-      return "cauchy";
-    case RobustLoss::kNone:
-      break;
-  }
-  return "none";
-}
-
 }  // namespace dala

@@ -16,8 +16,6 @@ enum class RobustLoss { kNone, kHuber, kCauchy };
 // Huber is quadratic for s <= a^2, Cauchy is a^2 log(1 + s / a^2). kNone returns null.
 std::unique_ptr<ceres::LossFunction> MakeLoss(RobustLoss loss, double scale);
 
-const char* RobustLossName(RobustLoss loss);
-
 }  // namespace dala
 
 #endif  // DALA_BACKEND_BA_BA_LOSS_H_

@@ -36,16 +36,6 @@ void CheckIncreasing(const std::string& path, int line, const Trajectory& traj, 
 
 }  // namespace
 
-const char* TrajectoryFormatName(TrajectoryFormat format) {
-  switch (format) {
-    case TrajectoryFormat::kAuto: return "auto";
-    case TrajectoryFormat::kTum: return "tum";
-    case TrajectoryFormat::kKitti: return "kitti";
-    case TrajectoryFormat::kEurocCsv: return "euroc";
-  }
-  return "?";
-}
-
 TrajectoryFormat ParseTrajectoryFormat(const std::string& name) {
   if (name == "auto") return TrajectoryFormat::kAuto;
   if (name == "tum") return TrajectoryFormat::kTum;

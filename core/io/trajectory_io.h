@@ -13,7 +13,6 @@ namespace dala {
 //  - kEurocCsv: "t_ns, px, py, pz, qw, qx, qy, qz[, ...]" (EuRoC ground truth), '#' header.
 enum class TrajectoryFormat { kAuto, kTum, kKitti, kEurocCsv };
 
-const char* TrajectoryFormatName(TrajectoryFormat format);
 // Parses "auto", "tum", "kitti", "euroc"; throws dala::Error naming the accepted values.
 TrajectoryFormat ParseTrajectoryFormat(const std::string& name);
 

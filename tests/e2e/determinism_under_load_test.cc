@@ -20,10 +20,7 @@
 namespace dala {
 namespace {
 
-std::string ReadAll(const std::string& path) {
-  std::ifstream is(path);
-  return std::string(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
-}
+using testing::ReadAll;
 
 // Child processes that spin until the object dies.
 class BusyLoad {

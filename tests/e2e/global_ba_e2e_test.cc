@@ -45,12 +45,11 @@ sim::SimOptions Rover(int frames) {
 }
 
 // Every keyframe is refined, every frame keeps its pose (frames between keyframes follow theirs),
-// and the result is accurate. Bounds: 1.5x the measured ATE (runs are bit-identical).
-// Measured, rover 150 frames: stereo 0.0115 m online, 0.00486 m refined; mono (Sim(3)) 0.0351 m
-// online, 0.0282 m refined (0.0373 / 0.0298 m before the two held mono keyframes; 2026-12-03,
-// frames between keyframes tracked again: mono 0.0344 m online, 0.0275 m refined; stop 21, a
-// new landmark takes every window keyframe's view: 0.0168 m online, 0.0234 m refined, i.e. the
-// global BA is now worse than the window on this run, docs/monocular.md).
+// and the result is accurate. Bounds: 1.5x the measured ATE (runs are bit-identical), and in
+// stereo the refined trajectory no worse than the online one. Measured, rover 150 frames:
+// stereo 0.0115 m online, 0.00486 m refined; mono (Sim(3)) 0.0168 m online, 0.0234 m refined
+// (the global BA is worse than the window on this mono run, docs/monocular.md, so mono has no
+// "refined <= online" check).
 TEST(GlobalBaE2e, RefinesEveryKeyframeStereoAndMono) {
   const sim::SyntheticSequence seq(Rover(150));
   for (const char* mode : {"stereo", "mono"}) {
@@ -73,14 +72,17 @@ TEST(GlobalBaE2e, RefinesEveryKeyframeStereoAndMono) {
     std::cout << "[ measured ] " << mode << " rover 150: ATE " << online << " m online, " << refined
               << " m after the global BA (" << run.refinement.report << ")" << std::endl;
     EXPECT_LT(refined, 1.5 * (std::string(mode) == "mono" ? 0.0234 : 0.00486));
+    if (std::string(mode) == "stereo") {
+      EXPECT_LE(refined, online);
+    }
   }
 }
 
-// Off (the default), after_loop without a loop, and the EKF: nothing changes, and the report
-// says why.
+// Off, after_loop without a loop, rig_offset (the default) on an exact rig, and the EKF: nothing
+// changes, and the report says why.
 TEST(GlobalBaE2e, WhenItDoesNothingItSaysWhy) {
   const sim::SyntheticSequence seq(Rover(40));
-  for (const char* setting : {"off", "after_loop", "ekf"}) {
+  for (const char* setting : {"off", "after_loop", "rig_offset", "ekf"}) {
     SCOPED_TRACE(setting);
     SystemOptions options;
     if (std::string(setting) == "ekf") {

@@ -117,12 +117,7 @@ TEST(MonoEkfE2e, OdometryIsReadIntoTheMeasurementAndFixesTheScale) {
   EXPECT_LT(fraction, kOdometryRoverBound);
 }
 
-std::string ReadAll(const std::string& path) {
-  std::ifstream is(path);
-  std::stringstream ss;
-  ss << is.rdbuf();
-  return ss.str();
-}
+using testing::ReadAll;
 
 // `dala run` on a folder written with --odometry: the reader gives the odometry, the System
 // uses it, the summary says the scale is metric.

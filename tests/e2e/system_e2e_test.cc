@@ -286,12 +286,7 @@ TEST(SystemE2e, UnsupportedCombinationIsAClearError) {
   }
 }
 
-std::string ReadAll(const std::string& path) {
-  std::ifstream is(path);
-  std::stringstream ss;
-  ss << is.rdbuf();
-  return ss.str();
-}
+using testing::ReadAll;
 
 // `dala run` twice on the same rendered folder: identical trajectory files, and the report has
 // the keys scripts rely on.

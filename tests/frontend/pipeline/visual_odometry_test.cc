@@ -39,7 +39,7 @@ VoRun RunVisualOdometry(const sim::SyntheticSequence& seq) {
 TEST(VisualOdometry, RoverLoopDriftIsSmall) {
   sim::SimOptions options;
   options.preset = "rover_loop";
-  options.frames = std::getenv("DALA_VO_FRAMES") ? std::atoi(std::getenv("DALA_VO_FRAMES")) : 450;
+  options.frames = 450;
   options.seed = 3;
   const sim::SyntheticSequence seq(options);
   const VoRun run = RunVisualOdometry(seq);
@@ -52,11 +52,8 @@ TEST(VisualOdometry, RoverLoopDriftIsSmall) {
             << EvalResultToTable(result) << std::endl;
   EXPECT_EQ(run.lost, 0);
   ASSERT_TRUE(result.has_kitti);
-  // Measured 0.134 % (450 frames, deterministic); bound 1.5x. DALA_VO_FRAMES changes the run,
-  // and the bound only holds for the default.
-  if (!std::getenv("DALA_VO_FRAMES")) {
-    EXPECT_LT(result.kitti.t_err_percent, 1.5 * 0.134);
-  }
+  // Measured 0.134 % (450 frames, deterministic); bound 1.5x.
+  EXPECT_LT(result.kitti.t_err_percent, 1.5 * 0.134);
 }
 
 // The second thread (right detection, first temporal matching beside the stereo matching) must
