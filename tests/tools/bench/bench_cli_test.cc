@@ -23,17 +23,14 @@ namespace dala {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::ExpectSameBenchResults;
 using ::testing::HasSubstr;
+using testing::ReadAll;
 
 struct CliResult {
   int status = -1;
   std::string err;
 };
-
-std::string ReadText(const std::string& path) {
-  std::ifstream is(path);
-  return std::string(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
-}
 
 int CountLines(const std::string& path) {
   std::ifstream is(path);
@@ -69,7 +66,7 @@ class BenchCli : public ::testing::Test {
     const int status = std::system(cmd.c_str());
     CliResult r;
     r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = ReadText(err);
+    r.err = ReadAll(err);
     return r;
   }
   CliResult BenchSuite(const std::string& out, const std::string& extra = "") {
@@ -77,7 +74,7 @@ class BenchCli : public ::testing::Test {
   }
 
   static nlohmann::json Results(const std::string& out) {
-    return nlohmann::json::parse(ReadText(out + "/results.json"));
+    return nlohmann::json::parse(ReadAll(out + "/results.json"));
   }
   static std::map<std::string, nlohmann::json> ByKey(const nlohmann::json& results) {
     std::map<std::string, nlohmann::json> runs;
@@ -168,17 +165,17 @@ TEST_F(BenchCli, RecordsMetricsOfEveryRunAndItsFailures) {
 
   // CSV: header + one line per run (the errors span lines inside quotes, so count records by
   // the sequence name at a line start).
-  const std::string csv = ReadText(out + "/results.csv");
+  const std::string csv = ReadAll(out + "/results.csv");
   EXPECT_EQ(csv.rfind("sequence,config,variant,start,seed,estimator,mode,status,ate_rmse,", 0), 0u);
   EXPECT_THAT(csv, HasSubstr("square_a,ba-stereo,,,1,ba,stereo,ok,0.1000,"));
-  const std::string md = ReadText(out + "/results.md");
+  const std::string md = ReadAll(out + "/results.md");
   EXPECT_THAT(md, HasSubstr("| sequence | ba-mono | ba-stereo | crashes | ekf-mono | ekf-stereo "
                             "| fails |"));
   EXPECT_THAT(md, HasSubstr("| square_a | unsupported | 0.1000 | crashed | **0.0000** | 0.1000 "
                             "| failed |"));
 
   // The HTML references only existing PNGs, among them every run's plots.
-  const std::string html = ReadText(out + "/report.html");
+  const std::string html = ReadAll(out + "/report.html");
   const std::regex src("src=\"([^\"]+)\"");
   std::set<std::string> pngs;
   for (auto it = std::sregex_iterator(html.begin(), html.end(), src); it != std::sregex_iterator();
@@ -263,11 +260,11 @@ TEST_F(BenchCli, ShardsPartitionTheRunsAndMergeReproducesTheWhole) {
     EXPECT_EQ(x, y) << k;
   }
   // The merged report's plots were copied along.
-  const std::string html = ReadText(merged + "/report.html");
+  const std::string html = ReadAll(merged + "/report.html");
   EXPECT_THAT(html, HasSubstr("src=\"runs/square_b/ba-stereo/eval.png\""));
   EXPECT_TRUE(fs::exists(merged + "/runs/square_b/ba-stereo/eval.png"));
   EXPECT_TRUE(fs::exists(merged + "/plots/square_b_ate.png"));
-  EXPECT_EQ(ReadText(whole + "/results.md").substr(0, 200).find("shard"), std::string::npos);
+  EXPECT_EQ(ReadAll(whole + "/results.md").substr(0, 200).find("shard"), std::string::npos);
 
   // A run in two folders is refused.
   const CliResult twice = Bench("merge " + whole + dirs + " --out " + (dir_ / "bad"));
@@ -404,7 +401,7 @@ TEST_F(BenchVariantsCli, RunsEverySeedAndStartAndSummarisesTheirSpread) {
   EXPECT_THAT(seed3["command"].get<std::string>(), ::testing::Not(HasSubstr("--first_frame")));
   EXPECT_EQ(CountLines(out + "/synth_calls.txt"), 3);
   for (const char* seed : {"1", "2", "3"}) {
-    EXPECT_THAT(ReadText(out + "/sequences/scene@seed" + std::string(seed) + "/synth.yaml"),
+    EXPECT_THAT(ReadAll(out + "/sequences/scene@seed" + std::string(seed) + "/synth.yaml"),
                 HasSubstr(std::string("seed: ") + seed));
   }
 
@@ -430,7 +427,7 @@ TEST_F(BenchVariantsCli, RunsEverySeedAndStartAndSummarisesTheirSpread) {
   EXPECT_EQ(scene["ate_worst_variant"], "seed3");
   EXPECT_EQ(scene["ate_best_variant"], "seed1");
 
-  const std::string md = ReadText(out + "/results.md");
+  const std::string md = ReadAll(out + "/results.md");
   EXPECT_THAT(md, HasSubstr("| sequence | config | runs | failed | ATE median [m] | best [m] | "
                             "best run | worst [m] | worst run | failed runs |"));
   EXPECT_THAT(md, HasSubstr("| clip | ba-stereo | 3 | 1 | 0.1200 | 0.1000 | start0 | 0.1400 | "
@@ -440,12 +437,12 @@ TEST_F(BenchVariantsCli, RunsEverySeedAndStartAndSummarisesTheirSpread) {
   // Every run's ATE, and the medians side by side with the failures counted.
   EXPECT_THAT(md, HasSubstr("| clip | start8 | failed | "));
   EXPECT_THAT(md, HasSubstr("| clip | 0.1200 (1/3 failed) | "));
-  EXPECT_EQ(ReadText(out + "/summary.csv").rfind("sequence,config,runs,not_ok,ate_median,", 0), 0u);
-  EXPECT_THAT(ReadText(out + "/summary.csv"),
+  EXPECT_EQ(ReadAll(out + "/summary.csv").rfind("sequence,config,runs,not_ok,ate_median,", 0), 0u);
+  EXPECT_THAT(ReadAll(out + "/summary.csv"),
               HasSubstr("clip,ba-stereo,3,1,0.1200,0.1000,start0,0.1400,start4,start8: failed\n"));
 
   // The report draws the spread of each sequence and links only existing files.
-  const std::string html = ReadText(out + "/report.html");
+  const std::string html = ReadAll(out + "/report.html");
   EXPECT_THAT(html, HasSubstr("src=\"plots/clip_ate_spread.png\""));
   EXPECT_THAT(html, HasSubstr("src=\"plots/scene_ate_spread.png\""));
   EXPECT_THAT(html, HasSubstr("src=\"runs/clip@start4/ba-stereo/eval.png\""));
@@ -504,25 +501,9 @@ TEST_F(BenchVariantsCli, ShardsOfVariantsMergeIntoTheOneMachineResults) {
   const CliResult m = Bench("merge" + dirs + " --out " + merged);
   ASSERT_EQ(m.status, 0) << m.err;
 
-  // results.json: identical but for what differs between two executions of the same run
-  // (times, memory, the absolute paths in commands and errors) and the merge's provenance.
-  nlohmann::json a = Results(whole), b = Results(merged);
-  for (nlohmann::json* j : {&a, &b}) {
-    for (const char* key : {"merged_from", "suite"}) j->erase(key);
-    for (auto& run : (*j)["runs"]) {
-      for (const char* key : {"wall_s", "peak_rss_mb", "command", "error"}) run.erase(key);
-    }
-  }
-  EXPECT_EQ(a.dump(1), b.dump(1));
-  ASSERT_EQ(a["summary"].size(), 4u);
-  // The spread table and the per-run ATE are byte-identical (no time or path in them).
-  EXPECT_EQ(ReadText(whole + "/summary.csv"), ReadText(merged + "/summary.csv"));
-  const auto section = [](const std::string& md) {
-    const size_t from = md.find("## ATE RMSE over the runs");
-    return md.substr(from, md.find("## ATE RMSE [m], median") - from);
-  };
-  EXPECT_EQ(section(ReadText(whole + "/results.md")), section(ReadText(merged + "/results.md")));
-  EXPECT_THAT(section(ReadText(merged + "/results.md")), HasSubstr("| clip | start8 | failed |"));
+  ExpectSameBenchResults(whole, merged);
+  EXPECT_EQ(Results(merged)["summary"].size(), 4u);
+  EXPECT_THAT(ReadAll(merged + "/results.md"), HasSubstr("| clip | start8 | failed |"));
   EXPECT_TRUE(fs::exists(merged + "/runs/scene@seed2/ba-stereo/eval.png"));
   EXPECT_TRUE(fs::exists(merged + "/plots/scene_ate_spread.png"));
 }

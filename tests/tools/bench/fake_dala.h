@@ -21,6 +21,13 @@
 //    fake.crash=1: kill -SEGV itself;
 //    fake.sleep=S: sleep S seconds first; ba with mono: exit 2 "... is not supported".
 
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/test_util.h"
+
 namespace dala::testing {
 
 inline const char* kFakeDalaScript = R"SCRIPT(#!/bin/bash
@@ -81,6 +88,28 @@ awk -v n=$n -v est=$est -v mode=$mode 'BEGIN {
 mv "$out/report.json.tmp" "$out/report.json"
 exit 0
 )SCRIPT";
+
+// Expects a merged bench output folder to equal a one-machine one: results.json but for what
+// differs between two executions of the same run (times, memory, the absolute paths in commands
+// and errors) and the merge's provenance; summary.csv and the per-run ATE section of results.md
+// byte for byte (no time or path in them).
+inline void ExpectSameBenchResults(const std::string& whole, const std::string& merged) {
+  nlohmann::json a = nlohmann::json::parse(ReadAll(whole + "/results.json"));
+  nlohmann::json b = nlohmann::json::parse(ReadAll(merged + "/results.json"));
+  for (nlohmann::json* j : {&a, &b}) {
+    for (const char* key : {"merged_from", "suite"}) j->erase(key);
+    for (auto& run : (*j)["runs"]) {
+      for (const char* key : {"wall_s", "peak_rss_mb", "command", "error"}) run.erase(key);
+    }
+  }
+  EXPECT_EQ(a.dump(1), b.dump(1));
+  EXPECT_EQ(ReadAll(whole + "/summary.csv"), ReadAll(merged + "/summary.csv"));
+  const auto section = [](const std::string& md) {
+    const size_t from = md.find("## ATE RMSE over the runs");
+    return md.substr(from, md.find("## ATE RMSE [m], median") - from);
+  };
+  EXPECT_EQ(section(ReadAll(whole + "/results.md")), section(ReadAll(merged + "/results.md")));
+}
 
 }  // namespace dala::testing
 

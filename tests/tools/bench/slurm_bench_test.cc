@@ -27,12 +27,9 @@ namespace dala {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::ExpectSameBenchResults;
 using ::testing::HasSubstr;
-
-std::string ReadText(const std::string& path) {
-  std::ifstream is(path);
-  return std::string(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
-}
+using testing::ReadAll;
 
 struct Shell {
   int status = -1;
@@ -156,7 +153,7 @@ class BenchSlurm : public ::testing::Test {
 
 TEST_F(BenchSlurm, ShardedJobArrayMergesIntoTheOneMachineReport) {
   // The scripts as docs/benchmarking.md shows them.
-  const std::string md = ReadText(std::string(DALA_SOURCE_DIR) + "/docs/benchmarking.md");
+  const std::string md = ReadAll(std::string(DALA_SOURCE_DIR) + "/docs/benchmarking.md");
   std::string bench_sbatch = BashBlockAfter(md, "**Slurm job array**", 0);
   const std::string merge_sbatch = BashBlockAfter(md, "**Slurm job array**", 1);
   ASSERT_THAT(bench_sbatch, HasSubstr("#SBATCH --array=0-7"));
@@ -239,7 +236,7 @@ TEST_F(BenchSlurm, ShardedJobArrayMergesIntoTheOneMachineReport) {
   for (int i = 0; i < 8; ++i) {
     const std::string part = scratch + "/bench/part" + std::to_string(i);
     ASSERT_TRUE(fs::exists(part + "/results.json")) << part << "\n" << logs();
-    const nlohmann::json r = nlohmann::json::parse(ReadText(part + "/results.json"));
+    const nlohmann::json r = nlohmann::json::parse(ReadAll(part + "/results.json"));
     shards.insert(r["shard"].get<std::string>());
     for (const auto& run : r["runs"]) {
       EXPECT_EQ(run["index"].get<int>() % 8, i);
@@ -259,38 +256,23 @@ TEST_F(BenchSlurm, ShardedJobArrayMergesIntoTheOneMachineReport) {
   }
   EXPECT_EQ(exited_ok, 8) << tasks.out;
 
-  // The merged report equals the one-machine one, compared as the merge test does
-  // (bench_cli_test.cc ShardsOfVariantsMergeIntoTheOneMachineResults): results.json but for
-  // times, memory, paths and provenance; summary.csv and the per-run ATE table byte for byte.
+  // The merged report equals the one-machine one (ExpectSameBenchResults, as the merge test).
   ASSERT_TRUE(fs::exists(merged + "/results.json")) << logs();
-  nlohmann::json a = nlohmann::json::parse(ReadText(whole + "/results.json"));
-  nlohmann::json b = nlohmann::json::parse(ReadText(merged + "/results.json"));
+  const nlohmann::json b = nlohmann::json::parse(ReadAll(merged + "/results.json"));
   EXPECT_EQ(b["runs_total"], 10);
   ASSERT_EQ(b["runs"].size(), 10u);
   EXPECT_EQ(b["merged_from"].size(), 8u);
-  for (nlohmann::json* j : {&a, &b}) {
-    for (const char* key : {"merged_from", "suite"}) j->erase(key);
-    for (auto& run : (*j)["runs"]) {
-      for (const char* key : {"wall_s", "peak_rss_mb", "command", "error"}) run.erase(key);
-    }
-  }
-  EXPECT_EQ(a.dump(1), b.dump(1));
-  ASSERT_EQ(a["summary"].size(), 4u);
-  EXPECT_EQ(ReadText(whole + "/summary.csv"), ReadText(merged + "/summary.csv"));
-  EXPECT_THAT(ReadText(merged + "/summary.csv"),
+  EXPECT_EQ(b["summary"].size(), 4u);
+  ExpectSameBenchResults(whole, merged);
+  EXPECT_THAT(ReadAll(merged + "/summary.csv"),
               HasSubstr("clip,ba-stereo,3,1,0.1200,0.1000,start0,0.1400,start4,start8: failed\n"));
-  const auto section = [](const std::string& text) {
-    const size_t from = text.find("## ATE RMSE over the runs");
-    return text.substr(from, text.find("## ATE RMSE [m], median") - from);
-  };
-  EXPECT_EQ(section(ReadText(whole + "/results.md")), section(ReadText(merged + "/results.md")));
   EXPECT_TRUE(fs::exists(merged + "/runs/scene@seed2/ba-stereo/eval.png"));
   EXPECT_TRUE(fs::exists(merged + "/report.html"));
 
   // A task resubmitted alone (as the docs say) resumes its shard: shard 3 of 8 again, nothing
   // rerun; a merge after it gives the same report.
   const std::string part3 = scratch + "/bench/part3";
-  const std::string calls = ReadText(part3 + "/run_calls.txt");
+  const std::string calls = ReadAll(part3 + "/run_calls.txt");
   ASSERT_NE(calls, "");
   const Shell again = Slurm("sbatch --parsable --array=3 bench.sbatch", work, env);
   ASSERT_EQ(again.status, 0) << again.out;
@@ -298,9 +280,9 @@ TEST_F(BenchSlurm, ShardedJobArrayMergesIntoTheOneMachineReport) {
       Slurm("sbatch --parsable --dependency=afterok:" + JobId(again) + " merge.sbatch", work, env);
   ASSERT_EQ(remerge.status, 0) << remerge.out;
   ASSERT_TRUE(WaitCompleted(JobId(remerge), 60, &why)) << why << logs();
-  EXPECT_EQ(nlohmann::json::parse(ReadText(part3 + "/results.json"))["shard"], "3/8");
-  EXPECT_EQ(ReadText(part3 + "/run_calls.txt"), calls);
-  EXPECT_EQ(ReadText(whole + "/summary.csv"), ReadText(merged + "/summary.csv"));
+  EXPECT_EQ(nlohmann::json::parse(ReadAll(part3 + "/results.json"))["shard"], "3/8");
+  EXPECT_EQ(ReadAll(part3 + "/run_calls.txt"), calls);
+  EXPECT_EQ(ReadAll(whole + "/summary.csv"), ReadAll(merged + "/summary.csv"));
 }
 
 }  // namespace
