@@ -767,7 +767,7 @@ std::string SlidingWindowEstimator::DisparityOffsetNote() const {
        << " px is within what an exact rig shows (|median| <= " << o.offset_calibration.bias_px
        << " px): none applied";
   }
-  if (!c.converged() && c.num_estimates() > 0) os << " (still calibrating)";
+  if (!online_offset_px_ && !c.converged() && c.num_estimates() > 0) os << " (still calibrating)";
   if (ba_.disparity_offset_px() != 0.0) {
     // In the form that gives it to a later run of the same rig.
     os << "; for later runs of this rig: --set ba.calibrate_disparity_offset=0 --set "
@@ -777,16 +777,18 @@ std::string SlidingWindowEstimator::DisparityOffsetNote() const {
   return os.str();
 }
 
-bool SlidingWindowEstimator::KeepsObservationArchive() const {
-  if (options_.final_ba == "off") return false;
-  if (options_.final_ba != "rig_offset") return true;
+bool SlidingWindowEstimator::CalibratesRigOffset() const {
   return rig_.is_stereo() && options_.ba.calibrate_disparity_offset &&
          !options_.ba.estimate_disparity_offset;
 }
 
+bool SlidingWindowEstimator::KeepsObservationArchive() const {
+  if (options_.final_ba == "off") return false;
+  return options_.final_ba != "rig_offset" || CalibratesRigOffset();
+}
+
 bool SlidingWindowEstimator::RigOffsetCalibrated() const {
-  return rig_.is_stereo() && options_.ba.calibrate_disparity_offset &&
-         !options_.ba.estimate_disparity_offset && ba_.disparity_offset_px() != 0.0;
+  return CalibratesRigOffset() && ba_.disparity_offset_px() != 0.0;
 }
 
 void SlidingWindowEstimator::DeferFrameRefinement(size_t index, const FrameMeasurement& m) {

@@ -327,6 +327,9 @@ class SlidingWindowEstimator : public Estimator {
   void RefineFrame(const WaitingFrame& waiting);
   // Blocks until a background window solve has finished (no-op when none is running).
   void WaitForWindowSolve() const { solver_.Wait(); }
+  // A stereo rig whose disparity offset is calibrated online (ba.calibrate_disparity_offset, not
+  // the per-window estimate).
+  bool CalibratesRigOffset() const;
   // Refine will need observation_archive_ (options_.final_ba; "rig_offset": a stereo rig whose
   // offset is calibrated online, which only the end of the run can tell is non-zero).
   bool KeepsObservationArchive() const;
