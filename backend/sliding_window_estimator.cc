@@ -782,13 +782,18 @@ bool SlidingWindowEstimator::CalibratesRigOffset() const {
          !options_.ba.estimate_disparity_offset;
 }
 
-bool SlidingWindowEstimator::KeepsObservationArchive() const {
-  if (options_.final_ba == "off") return false;
-  return options_.final_ba != "rig_offset" || CalibratesRigOffset();
+bool SlidingWindowEstimator::KnowsRigOffset() const {
+  return rig_.is_stereo() && !options_.ba.calibrate_disparity_offset &&
+         !options_.ba.estimate_disparity_offset && options_.ba.disparity_offset_px != 0.0;
 }
 
-bool SlidingWindowEstimator::RigOffsetCalibrated() const {
-  return CalibratesRigOffset() && ba_.disparity_offset_px() != 0.0;
+bool SlidingWindowEstimator::KeepsObservationArchive() const {
+  if (options_.final_ba == "off") return false;
+  return options_.final_ba != "rig_offset" || CalibratesRigOffset() || KnowsRigOffset();
+}
+
+bool SlidingWindowEstimator::RigHasOffset() const {
+  return (CalibratesRigOffset() || KnowsRigOffset()) && ba_.disparity_offset_px() != 0.0;
 }
 
 void SlidingWindowEstimator::DeferFrameRefinement(size_t index, const FrameMeasurement& m) {
@@ -848,10 +853,12 @@ RefinementSummary SlidingWindowEstimator::Refine() {
     out.report = "global BA not run: no loop was closed (ba.final_ba=always runs it anyway)";
     return out;
   }
-  const bool offset_found = RigOffsetCalibrated();
-  if (options_.final_ba == "rig_offset" && !offset_found) {
+  const bool rig_offset = RigHasOffset();
+  // Free when the online calibration found it, held when the user gave it.
+  const bool offset_found = rig_offset && CalibratesRigOffset();
+  if (options_.final_ba == "rig_offset" && !rig_offset) {
     out.report = rig_.is_stereo()
-                     ? "global BA not run: no disparity offset was calibrated for the rig "
+                     ? "global BA not run: the rig has no disparity offset, calibrated or given "
                        "(ba.final_ba=always runs it anyway)"
                      : "global BA not run: one camera has no disparity offset "
                        "(ba.final_ba=always runs it anyway)";
@@ -871,7 +878,8 @@ RefinementSummary SlidingWindowEstimator::Refine() {
   problem.landmarks = map_points_;
   problem.observations = observation_archive_;
   // A rig whose offset was calibrated online: the global BA estimates it again with every
-  // keyframe (those made before the calibration knew it were solved without it).
+  // keyframe (those made before the calibration knew it were solved without it). A known
+  // offset (ba.disparity_offset_px) is held.
   GlobalBaOptions global_ba = options_.global_ba;
   global_ba.estimate_disparity_offset = offset_found;
   global_ba.disparity_offset_prior_sigma_px = options_.ba.disparity_offset_prior_sigma_px;

@@ -195,7 +195,8 @@ struct SlidingWindowEstimatorOptions {
   // BA spreads the loop's correction over every observation, as ORB-SLAM's global BA after a
   // loop does), or "rig_offset" (a stereo rig whose disparity offset the online calibration
   // found non-zero: the keyframes that left the window before the offset was known kept the
-  // scale error it causes, and the global BA re-solves every keyframe with the offset free).
+  // scale error it causes, and the global BA re-solves every keyframe with the offset free; or
+  // whose offset was given, ba.disparity_offset_px: re-solved with it held).
   // Not "always": on exact rendered rigs and KITTI it is better on some runs and worse on
   // others (docs/backend.md, "Global BA after the run"); whenever it runs on a rig with a
   // calibrated offset, the offset is free in it.
@@ -333,8 +334,11 @@ class SlidingWindowEstimator : public Estimator {
   // Refine will need observation_archive_ (options_.final_ba; "rig_offset": a stereo rig whose
   // offset is calibrated online, which only the end of the run can tell is non-zero).
   bool KeepsObservationArchive() const;
-  // A stereo rig whose disparity offset the online calibration set to a non-zero value.
-  bool RigOffsetCalibrated() const;
+  // A stereo rig whose disparity offset is given (ba.disparity_offset_px, not 0, with the
+  // calibration off).
+  bool KnowsRigOffset() const;
+  // A stereo rig with a non-zero disparity offset, calibrated online or given.
+  bool RigHasOffset() const;
 
   StereoRig rig_;
   SlidingWindowEstimatorOptions options_;
