@@ -6,10 +6,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 #include <string>
 
+#include "core/error.h"
 #include "core/geometry.h"
 
 namespace dala::testing {
@@ -23,6 +25,16 @@ inline bool HaveSharedData(const std::string& sub) {
   if (!::dala::testing::HaveSharedData(sub))                                                  \
   GTEST_SKIP() << "shared data '" << ::dala::testing::SharedDataDir() << "/" << (sub)         \
                << "' is absent (it sits beside the project as ../shared/data); skipping"
+
+// The message of the dala::Error that f throws ("" when it throws none).
+inline std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
 
 // The whole file as a string ("" when it cannot be read).
 inline std::string ReadAll(const std::filesystem::path& path) {

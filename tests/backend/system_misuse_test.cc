@@ -9,6 +9,7 @@
 #include "backend/system.h"
 #include "core/error.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/test_util.h"
 
 namespace dala {
 namespace {
@@ -23,12 +24,7 @@ sim::SimOptions SmallRover() {
 
 // Calls Track(bad) and returns the error's message ("" when nothing was thrown).
 std::string TrackError(System* system, const Frame& bad) {
-  try {
-    system->Track(bad);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
+  return testing::ErrorOf([&] { system->Track(bad); });
 }
 
 TEST(SystemMisuse, AWrongFrameIsAnErrorThatChangesNothing) {

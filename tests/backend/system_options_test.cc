@@ -4,22 +4,15 @@
 
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <string>
 
 #include "core/error.h"
+#include "tests/test_util.h"
 
 namespace dala {
 namespace {
 
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::ErrorOf;
 
 // A key that was removed is not only "unknown": the error names what replaced it, from --set
 // and from a YAML file alike.

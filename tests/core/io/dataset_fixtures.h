@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "tests/test_util.h"  // ErrorOf
 
 namespace dala::testing {
 
@@ -65,16 +66,6 @@ inline void WriteKittiFolder(const std::string& folder, const KittiFixture& f) {
                 f.fx, f.cx, f.fx, f.cy, f.fx, f.cx, -f.fx * f.baseline, f.fx, f.cy, f.fx, f.cx,
                 f.fx, f.cy);
   WriteText(folder + "/calib.txt", calib);
-}
-
-// The message of the dala::Error f throws, or "<no error>".
-inline std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "<no error>";
 }
 
 }  // namespace dala::testing

@@ -23,12 +23,7 @@ std::string Write(const testing::TempDir& dir, const std::string& name, const st
 
 // The message of the dala::Error that LoadBenchSuite throws (empty when it does not throw).
 std::string LoadError(const std::string& path) {
-  try {
-    LoadBenchSuite(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
+  return testing::ErrorOf([&] { LoadBenchSuite(path); });
 }
 
 TEST(BenchSuite, ReadsSequencesAndConfigurations) {

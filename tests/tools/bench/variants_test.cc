@@ -26,12 +26,7 @@ std::string Write(const testing::TempDir& dir, const std::string& text) {
 }
 
 std::string LoadError(const std::string& path) {
-  try {
-    LoadBenchSuite(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
+  return testing::ErrorOf([&] { LoadBenchSuite(path); });
 }
 
 const char* kConfigs = "configurations:\n  - {name: c, estimator: ba, mode: stereo}\n";
