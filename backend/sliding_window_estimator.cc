@@ -29,7 +29,7 @@ bool BaLoopClosureOptions::IsValid(std::string* why) const {
     return false;
   }
   if (!(mono_scale_sigma > 0 && mono_loop_scale_sigma > 0)) {
-    if (why) *why = "loop.ba_mono_scale_sigma and loop.ba_mono_loop_scale_sigma must be > 0";
+    if (why) *why = "ba.loop_mono_scale_sigma and ba.loop_mono_loop_scale_sigma must be > 0";
     return false;
   }
   return sim3.IsValid(why);
@@ -44,7 +44,6 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (max_new_landmarks_per_keyframe < 10)
     return fail("ba.max_new_landmarks_per_keyframe must be >= 10");
   if (grid_cols < 1 || grid_rows < 1) return fail("ba.grid_cols and ba.grid_rows must be >= 1");
-  if (max_landmark_depth_m < 0) return fail("ba.max_landmark_depth_m must be >= 0 (0: no limit)");
   if (mono_reinit_after_lost_frames < 1)
     return fail("ba.mono_reinit_after_lost_frames must be >= 1");
   if (refine_frames != "mono" && refine_frames != "always" && refine_frames != "off") {
@@ -140,9 +139,7 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
     if (landmark_observations_.count(o.landmark)) {
       out.push_back(ToBa(o));
       ++cell_count[cell_of(o.uv)];
-    } else if (stereo ? o.has_stereo() && (options_.max_landmark_depth_m == 0 ||
-                                           o.p_c0.z() < options_.max_landmark_depth_m)
-                      : last_keyframe_observations_.count(o.landmark) > 0) {
+    } else if (stereo ? o.has_stereo() : last_keyframe_observations_.count(o.landmark) > 0) {
       fresh.push_back(&o);
     }
   }
@@ -179,9 +176,6 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
       views.emplace_back(last_keyframe_, &last_keyframe_observations_.at(o->landmark));
       for (const auto& [id, view] : views) {
         ba_.AddObservation(id, *view);
-        if (KeepsObservationArchive() && !options_.final_ba_all_tracks) {
-          observation_archive_.emplace_back(id, *view);
-        }
         ++landmark_observations_[o->landmark];
       }
     }
@@ -440,16 +434,12 @@ void SlidingWindowEstimator::AddToWindow(const BaKeyframe& kf, const FrameMeasur
   ba_.AddKeyframe(kf);
   // What Refine solves, kept only when it will run (~48 B per observation: ~15 MB over the
   // 1,300 keyframes of a 3,000-frame rover run).
-  if (!KeepsObservationArchive()) {
-    // Nothing kept.
-  } else if (options_.final_ba_all_tracks) {
+  if (KeepsObservationArchive()) {
     for (const FeatureObservation& o : m.observations) {
       if (!unconfirmed_loop_landmarks_.count(o.landmark)) {
         observation_archive_.emplace_back(kf.id, ToBa(o));
       }
     }
-  } else {
-    for (const BaObservation& o : kf.observations) observation_archive_.emplace_back(kf.id, o);
   }
   // The window's gauge (SlidingWindowBa: num_fixed_keyframes, -1 => 1 stereo, 2 mono).
   const int num_fixed = options_.ba.num_fixed_keyframes >= 0 ? options_.ba.num_fixed_keyframes

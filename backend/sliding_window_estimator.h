@@ -170,10 +170,6 @@ struct SlidingWindowEstimatorOptions {
   int max_new_landmarks_per_keyframe = 120;
   int grid_cols = 8;  // Cells of the new-landmark selection grid.
   int grid_rows = 5;
-  // Landmarks farther than this (camera frame) are not added: weak constraints on translation.
-  // 0 (default): no limit. A limit on the measured depth biases the far points kept (see
-  // StereoOptions::max_depth_m); rendered flight 0.1275 -> 0.0921 m without this one alone.
-  double max_landmark_depth_m = 0.0;
   BaLoopClosureOptions loop;
   bool background_solve = true;  // see the class comment.
   // Keyframe culling (see the class comment, "Culling"): a keyframe whose place an older
@@ -201,9 +197,6 @@ struct SlidingWindowEstimatorOptions {
   // others (docs/backend.md, "Global BA after the run"); whenever it runs on a rig with a
   // calibrated offset, the offset is free in it.
   std::string final_ba = "rig_offset";
-  // What the global BA solves: every track of every keyframe (the frontend's observations,
-  // those the window never mapped triangulated first), or only what the window was given.
-  bool final_ba_all_tracks = true;
   GlobalBaOptions global_ba;
 
   bool IsValid(std::string* why) const;
@@ -360,8 +353,9 @@ class SlidingWindowEstimator : public Estimator {
   std::map<KeyframeId, KeyframeId> merged_into_;  // Culled keyframe -> its holder.
   // The offset the online calibration had found, when Refine re-estimated it.
   std::optional<double> online_offset_px_;
-  // For Refine (kept only when KeepsObservationArchive()): every observation given to the
-  // window, or every track of each keyframe (final_ba_all_tracks), as (keyframe, observation);
+  // For Refine (kept only when KeepsObservationArchive()): every track of each keyframe (the
+  // frontend's observations; those the window never mapped are triangulated first), as
+  // (keyframe, observation);
   // and the keyframes each window held as its gauge (the first one or two after each restart).
   std::vector<std::pair<KeyframeId, BaObservation>> observation_archive_;
   std::set<KeyframeId> gauge_keyframes_;

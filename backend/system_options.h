@@ -2,8 +2,10 @@
 #define DALA_BACKEND_SYSTEM_OPTIONS_H_
 
 // SystemOptions: every component's options in one struct (DESIGN.md "Configuration"), and ONE
-// table of their user-settable keys, used four ways: the YAML loader (`dala run --config`),
-// `--set section.key=value`, `--dump-config`, and the "options" of the JSON run report.
+// table of their settable keys (system_options.cc), used four ways: the YAML loader (`dala run
+// --config`), `--set section.key=value`, `--dump_config`, and the "options" of the JSON run
+// report (every key). docs/options.md says when to change each; the experimental ones (study
+// options) are settable too but left out of --dump_config.
 //
 //   estimator: ba            # ba | ekf
 //   mode: stereo             # stereo | mono
@@ -12,6 +14,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -49,28 +52,20 @@ struct SystemOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Visits every settable option as (section, key, pointer). Sections: "" (top level), "harris",
-// "matcher" (tracking), "stereo", "motion", "keyframe", "frontend", "loop" (place recognition
-// and the BA's loop correction), "ba",
-// "ekf_stereo", "ekf_mono", "mono_init" (the monocular BA's two-view initialisation).
-class OptionVisitor {
- public:
-  virtual ~OptionVisitor() = default;
-  virtual void Field(const std::string& section, const std::string& key, double* v) = 0;
-  virtual void Field(const std::string& section, const std::string& key, int* v) = 0;
-  virtual void Field(const std::string& section, const std::string& key, bool* v) = 0;
-  virtual void Field(const std::string& section, const std::string& key, std::string* v) = 0;
-};
-void VisitOptions(SystemOptions* options, OptionVisitor* visitor);
-
 // Loads a YAML file over `options` (keys absent keep their value). dala::Error on an unknown key,
 // a wrong type or an unreadable file, naming the file and the key.
 void LoadSystemOptions(const std::string& yaml_path, SystemOptions* options);
 // Applies "section.key=value" (or "key=value" for top-level keys). dala::Error naming the key
 // and the known keys of that section when it does not exist, or the value when it does not parse.
 void SetSystemOption(const std::string& assignment, SystemOptions* options);
-// YAML text of every option (what --dump-config prints; LoadSystemOptions reads it back).
-std::string SystemOptionsToYaml(const SystemOptions& options);
+// The options as YAML (what --dump_config prints; LoadSystemOptions reads it back to the same
+// options). kUser: the options users tune (docs/options.md) and the experimental ones whose value
+// differs from the default; kAll: every option.
+enum class OptionSet { kUser, kAll };
+std::string SystemOptionsToYaml(const SystemOptions& options, OptionSet which = OptionSet::kUser);
+// The keys ("section.key", or "key" at the top level) in table order: kUser the options users
+// tune, kAll every option.
+std::vector<std::string> SystemOptionKeys(OptionSet which);
 nlohmann::json SystemOptionsToJson(const SystemOptions& options);
 
 }  // namespace dala

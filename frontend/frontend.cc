@@ -484,11 +484,11 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   }
   out.timings.motion_ms = MsSince(t0);
   t0 = Clock::now();
-  if (options_.match_keyframe && motion && keyframe_ && keyframe_->id != prev_->id) {
+  if (motion && keyframe_ && keyframe_->id != prev_->id) {
     ReacquireFromKeyframe(&cur);
   }
-  // The guided local-map search: one camera, or stereo when asked (local_map.stereo) or while
-  // the frame-to-frame tracks break (local_map.stereo_when_tracked_below). The relocalisation
+  // The guided local-map search: one camera, or stereo while the frame-to-frame tracks break
+  // (local_map.stereo_when_tracked_below). The relocalisation
   // after a lost frame: both.
   const double auto_below = options_.local_map.stereo_when_tracked_below;
   if (stereo && motion && auto_below > 0 && n > 0) {
@@ -506,7 +506,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
               << mean_tracked_fraction_ << ")";
     }
   }
-  const bool guided = !stereo || options_.local_map.stereo || stereo_search_on_;
+  const bool guided = !stereo || stereo_search_on_;
   if (prev_ && guided) {
     std::optional<Pose> T_prev_cur;
     if (motion) T_prev_cur = motion->T_prev_cur;
@@ -601,7 +601,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   }
   // Appearances are kept only where the System hands over local maps (System::Track) and the
   // search may run.
-  if (!stereo || options_.local_map.stereo || auto_below > 0) {
+  if (!stereo || auto_below > 0) {
     local_map_search_.Remember(cur.id, cur.detection, cur.landmark, cur.track_length);
   }
   relocalised_prev_ = relocalised_prev_ || relocalised;

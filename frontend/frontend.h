@@ -63,9 +63,7 @@ struct FrontendOptions {
   double tracking_radius_px = 30.0;
   // Matches of points without depth must lie this close to their epipolar line (pixels).
   double epipolar_gate_px = 2.0;
-  // Match the current frame to the last keyframe to re-acquire lost landmarks.
-  bool match_keyframe = true;
-  // Reprojection gate for keyframe re-acquisitions (pixels).
+  // Reprojection gate for the re-acquisition of lost landmarks from the last keyframe (pixels).
   double keyframe_gate_px = 3.0;
   // Use a second thread: the right image is detected, and the temporal matches of the first
   // tracking attempt are made, beside the left detection and the stereo matching (does not

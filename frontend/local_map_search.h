@@ -51,16 +51,12 @@ struct LocalMap {
 
 struct LocalMapSearchOptions {
   bool enable = true;
-  // Stereo runs too, from the first frame. Off by default: it helps fast motion (KITTI, the
-  // rendered `fast`) but not the slow rendered presets, and costs time (docs/results.md);
-  // stereo_when_tracked_below turns it on where it helps.
-  bool stereo = false;
   // Stereo runs turn it on by themselves while the frame-to-frame tracks break: when the mean
   // fraction of a frame's points that continue a track (exponential mean over ~5 frames, before
   // the search) falls below this; off again above it + 0.1. The tracks break when the camera
   // moves far between frames for its scene (KITTI's car: median 0.46; the rendered `fast`:
   // 0.43), which is where the search re-finds them; the slow rendered presets keep 0.70-0.80
-  // (docs/results.md). 0: never.
+  // (docs/results.md). 0: never; 1: from the first tracked frame on.
   double stereo_when_tracked_below = 0.55;
   double radius_px = 15.0;       // Search radius around each projection.
   // Descriptors of landmarks unseen that long (and not mapped). One camera only: a stereo

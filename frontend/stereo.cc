@@ -94,10 +94,8 @@ std::vector<std::optional<StereoPoint>> MatchStereo(const StereoRig& rig, const 
   int kept = 0;
   for (const Match& m : matches) {
     const Eigen::Vector2d& uv = left.points[m.i].uv;
-    const double u_right = options.refine_disparity ? RefineRightAbscissa(left_gray, right_gray, uv,
-                                                                          right.points[m.j].uv.x(),
-                                                                          options.refine_window)
-                                                    : right.points[m.j].uv.x();
+    const double u_right = RefineRightAbscissa(left_gray, right_gray, uv, right.points[m.j].uv.x(),
+                                               options.refine_window);
     const Eigen::Vector3d uvd(uv.x(), uv.y(), uv.x() - u_right);
     if (uvd.z() < min_disparity || uvd.z() > max_disparity) continue;
     StereoPoint sp;

@@ -60,8 +60,8 @@ struct StereoOptions {
   // or a low-resolution rig can leave too few near points, and a lost frame costs more than
   // the far points' scale bias).
   int min_points_with_depth = 100;
-  bool refine_disparity = true;  // Refine u_right by SSD along the row (else: detector's u).
-  int refine_window = 7;      // Side of the SSD window of the sub-pixel refinement (odd).
+  // Side of the SSD window along the row that refines u_right to sub-pixel (odd).
+  int refine_window = 7;
   double sigma_px = 1.0;      // Image noise (u, v), pixels.
   double sigma_disparity = 1.0;  // Disparity noise after refinement, pixels.
 

@@ -29,14 +29,17 @@
 #include "tools/stop_signal.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
-DEFINE_string(config, "", "run: YAML file of options (see --dump_config for every key)");
+DEFINE_string(config, "", "run: YAML file of options (--dump_config prints them; docs/options.md)");
 DEFINE_string(estimator, "", "run: ba (sliding-window bundle adjustment) or ekf (overrides config)");
 DEFINE_string(mode, "", "run: stereo or mono (overrides config)");
 DEFINE_string(format, "auto", "run: dataset format: auto, kitti, euroc, tum, synthetic");
 DEFINE_string(calibration, "", "run: calibration YAML overriding the dataset's (KITTI, TUM)");
 DEFINE_int32(first_frame, 0, "run: index of the first frame to process");
 DEFINE_int32(max_frames, 0, "run: process at most this many frames (0: all)");
-DEFINE_bool(dump_config, false, "run: print the effective options as YAML and exit");
+DEFINE_bool(dump_config, false,
+            "run: print the effective options users tune as YAML and exit (docs/options.md)");
+DEFINE_bool(dump_config_all, false,
+            "run: as --dump_config, with the experimental (study) options too");
 DEFINE_bool(progress, true, "run: show progress on stderr");
 DEFINE_bool(strict, false,
             "run: stop with an error (exit 2) at a missing, unreadable or wrongly sized image "
@@ -158,8 +161,9 @@ int RunRun(const std::vector<std::string>& args) {
   if (!FLAGS_estimator.empty()) SetSystemOption("estimator=" + FLAGS_estimator, &options);
   if (!FLAGS_mode.empty()) SetSystemOption("mode=" + FLAGS_mode, &options);
   for (const std::string& a : SetAssignments()) SetSystemOption(a, &options);
-  if (FLAGS_dump_config) {
-    std::cout << SystemOptionsToYaml(options);
+  if (FLAGS_dump_config || FLAGS_dump_config_all) {
+    std::cout << SystemOptionsToYaml(options, FLAGS_dump_config_all ? OptionSet::kAll
+                                                                    : OptionSet::kUser);
     return 0;
   }
   if (args.size() != 1) {
@@ -488,7 +492,7 @@ const CommandRegistrar kRegistrar(
      "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
      "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
      "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-     "         [--map FILE] [--dump_config]\n\n"
+     "         [--map FILE] [--dump_config | --dump_config_all]\n\n"
      "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
      "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
      "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"

@@ -163,7 +163,7 @@ TEST(LoopClosureE2e, RevisitStoresNoNewPlacesAndCullsItsKeyframes) {
 // One camera: the small loop (500 frames, ~124 m) from the left images. The revisit is
 // recognised and closed over Sim(3) (the current keyframe placed by PnP on the old landmarks,
 // the scale from the recognised landmarks mapped on both sides). Measured: Sim(3) ATE 0.0736 m
-// with the loop, 0.0754 m with the same run not corrected (`loop.ba_correct=0`): the correction
+// with the loop, 0.0754 m with the same run not corrected (`ba.loop_correct=0`): the correction
 // pays only 2 % on this run (docs/monocular.md records a larger gain with an earlier window:
 // 0.1006 -> 0.0576 m). Bounds: 1.5x the first, and closed below not corrected.
 TEST(LoopClosureE2e, MonoSmallLoopIsClosedOverSim3) {
@@ -180,7 +180,7 @@ TEST(LoopClosureE2e, MonoSmallLoopIsClosedOverSim3) {
             << ", closed " << run.loops_closed << std::endl;
   EXPECT_GE(run.loops_closed, 1);
   EXPECT_LT(run.eval.ate.translation.rmse, 1.5 * 0.0736);
-  SetSystemOption("loop.ba_correct=false", &options);
+  SetSystemOption("ba.loop_correct=false", &options);
   const LoopRun open = RunSystem(seq, options, AlignmentType::kSim3);
   ASSERT_TRUE(open.eval.ok) << open.eval.error;
   std::cout << "[ measured ] not corrected: Sim(3) ATE " << open.eval.ate.translation.rmse << " m"
@@ -219,7 +219,7 @@ TEST(LoopClosureE2e, LoopOptionsAreSettableAndValidated) {
   EXPECT_FALSE(options.frontend.loop.enable);
   SetSystemOption("loop.min_inliers=40", &options);
   EXPECT_EQ(options.frontend.loop.min_inliers, 40);
-  SetSystemOption("loop.ba_correct=false", &options);
+  SetSystemOption("ba.loop_correct=false", &options);
   EXPECT_FALSE(options.ba.loop.enable);
   SetSystemOption("loop.gate_fraction=0.2", &options);
   EXPECT_DOUBLE_EQ(options.frontend.loop.gate_fraction, 0.2);
