@@ -90,7 +90,7 @@ TrackResult System::Track(const Frame& frame) {
   EstimatorOutput e = estimator_->Add(m);
   const LocalMapSearchOptions& search = options_.frontend.local_map;
   // Stereo runs get it too, for the relocalisation after a lost frame; their guided search and
-  // keyframe evidence use it only with local_map.stereo (frontend.h). A lost frame is handed
+  // keyframe evidence use it only while local_map.stereo_when_tracked_below holds (frontend.h). A lost frame is handed
   // over even with an empty map (a window of lost keyframes holds no landmark), so that the
   // frontend knows to relocalise; estimators that never hand a map (the EKFs) are left alone.
   if (search.enable && (!e.local_map.empty() || (!e.valid && local_map_handed_))) {
@@ -259,19 +259,10 @@ void System::SaveMap(const std::string& path) const {
                                      ScaleDescription().rfind("metric", 0) == 0);
   if (std::count(keyframe_has_pose_.begin(), keyframe_has_pose_.end(), false) > 0) {
     // Some keyframes have no pose (mono before its initialisation): write a copy without them.
-    map.keyframes = keyframes();
-    WriteMapFile(path, map);
-    return;
+    WriteMapFile(path, map, keyframes());
+  } else {
+    WriteMapFile(path, map, keyframe_records_);
   }
-  // Lend the records to the writer (moved back even when writing throws).
-  map.keyframes = std::move(keyframe_records_);
-  try {
-    WriteMapFile(path, map);
-  } catch (...) {
-    keyframe_records_ = std::move(map.keyframes);
-    throw;
-  }
-  keyframe_records_ = std::move(map.keyframes);
 }
 
 SavedMap System::LoadMap(const std::string& path) { return ReadMapFile(path); }

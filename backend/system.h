@@ -156,8 +156,8 @@ class System {
   std::optional<bool> saved_map_metric_;  // UseMap: the saved map's unit is the metre.
   // The keyframes with their points, and each one's index in the trajectory: frame, time and
   // pose are refreshed from the estimator's trajectory when asked (they follow later
-  // corrections). Mutable: SaveMap refreshes them and lends them to the writer instead of
-  // copying ~0.5 MB of descriptors per keyframe.
+  // corrections). Mutable: a cache that the const readers (keyframes(), SaveMap) bring up to
+  // date; SaveMap hands them to the writer by reference (~0.5 MB of descriptors per keyframe).
   mutable std::vector<SavedKeyframe> keyframe_records_;
   mutable size_t pruned_records_ = 0;  // Records [0, pruned_records_) have been pruned.
   void PruneKeyframeRecords(const std::vector<MapPoint>& map) const;  // map: estimator_->map()

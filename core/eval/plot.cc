@@ -11,8 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "core/error.h"
-#include "core/io/atomic_file.h"
+#include "core/eval/chart_drawing.h"
 
 namespace dala {
 namespace {
@@ -23,7 +22,6 @@ const cv::Scalar kAxisText(40, 40, 40);
 const cv::Scalar kGtColour(60, 60, 60);      // Dark grey.
 const cv::Scalar kEstColour(180, 105, 30);   // Blue (BGR).
 const cv::Scalar kErrorColour(40, 40, 200);  // Red (BGR).
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 constexpr int kShift = 4;  // Sub-pixel drawing: coordinates in 1/16 pixel.
 constexpr double kSubPixel = 16.0;
 
@@ -32,32 +30,10 @@ cv::Point ToFixed(const cv::Point2d& p) {
           static_cast<int>(std::lround(p.y * kSubPixel))};
 }
 
-// A step of 1, 2 or 5 x 10^k giving about `target` intervals over `range`.
-double NiceStep(double range, int target) {
-  if (!(range > 0.0)) return 1.0;
-  const double raw = range / target;
-  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
-  const double r = raw / magnitude;
-  const double nice = r < 1.5 ? 1.0 : (r < 3.5 ? 2.0 : (r < 7.5 ? 5.0 : 10.0));
-  return nice * magnitude;
-}
-
-std::string TickLabel(double v, double step) {
-  const int decimals = step >= 1.0 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.*f", decimals, std::abs(v) < step * 1e-6 ? 0.0 : v);
-  return buf;
-}
-
-void PutText(cv::Mat* img, const std::string& text, cv::Point origin, double scale,
-             const cv::Scalar& colour, int thickness = 1) {
-  cv::putText(*img, text, origin, kFont, scale, colour, thickness, cv::LINE_AA);
-}
-
-cv::Size TextSize(const std::string& text, double scale, int thickness = 1) {
-  int baseline = 0;
-  return cv::getTextSize(text, kFont, scale, thickness, &baseline);
-}
+using chart::NiceStep;
+using chart::PutText;
+using chart::TextSize;
+using chart::TickLabel;
 
 // Text rotated by 90 degrees (reading upwards), centred at `centre`.
 void PutVerticalText(cv::Mat* img, const std::string& text, cv::Point centre, double scale,
@@ -272,13 +248,7 @@ void PlotEvaluation(const Trajectory& gt, const Trajectory& aligned_est, const E
   Legend(&img, {bottom.area.x + bottom.area.width - 8, bottom.area.y + 8},
          {{"ATE", kErrorColour}, {rmse_label, kBlack}});
 
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", img, png)) {
-    throw Error() << png_path << ": cannot encode the plot as PNG";
-  }
-  WriteFileAtomically(png_path, [&](std::ostream& os) {
-    os.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-  });
+  chart::WritePng(img, png_path);
 }
 
 }  // namespace dala

@@ -113,10 +113,14 @@ Pose GetPose(Reader* r) {
 
 }  // namespace
 
-void WriteMapFile(const std::string& path, const SavedMap& map) {
+void WriteMapFile(const std::string& path, const SavedMap& map,
+                  const std::vector<SavedKeyframe>& keyframes) {
+  if (!map.keyframes.empty()) {
+    throw Error() << path << ": the keyframes are given twice (in the map and beside it)";
+  }
   CHECK(HostIsLittleEndian()) << "dala map files are little-endian";
   if (map.descriptor_size < 0) throw Error() << path << ": negative descriptor size";
-  for (const SavedKeyframe& kf : map.keyframes) {
+  for (const SavedKeyframe& kf : keyframes) {
     for (const SavedKeyframePoint& p : kf.points) {
       const bool has = !p.descriptor.empty();
       if ((has && static_cast<int>(p.descriptor.size()) != map.descriptor_size) ||
@@ -139,7 +143,7 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
                   << map.thumbnail_height << " outside 0.." << kMaxThumbnailSide;
   }
   const size_t thumbnail_size = static_cast<size_t>(map.thumbnail_width) * map.thumbnail_height;
-  for (const SavedKeyframe& kf : map.keyframes) {
+  for (const SavedKeyframe& kf : keyframes) {
     if (kf.thumbnail.size() != thumbnail_size) {
       throw Error() << path << ": keyframe " << kf.frame << " has a thumbnail of "
                     << kf.thumbnail.size() << " values, the map declares " << map.thumbnail_width
@@ -151,8 +155,8 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
     w.PutRaw(kMagic, sizeof(kMagic));
     w.Put<uint32_t>(MapFileVersion::kCurrent);
     w.Put<uint32_t>(static_cast<uint32_t>(map.descriptor_size));
-    w.Put<uint64_t>(map.keyframes.size());
-    for (const SavedKeyframe& kf : map.keyframes) {
+    w.Put<uint64_t>(keyframes.size());
+    for (const SavedKeyframe& kf : keyframes) {
       w.Put<int64_t>(kf.frame.value);
       w.Put<int64_t>(kf.t_ns);
       PutPose(kf.T_w_c, &w);
@@ -177,13 +181,19 @@ void WriteMapFile(const std::string& path, const SavedMap& map) {
     w.Put<uint32_t>(map.metric ? 1 : 0);
     w.Put<uint32_t>(static_cast<uint32_t>(map.thumbnail_width));
     w.Put<uint32_t>(static_cast<uint32_t>(map.thumbnail_height));
-    for (const SavedKeyframe& kf : map.keyframes) {
+    for (const SavedKeyframe& kf : keyframes) {
       w.PutRaw(reinterpret_cast<const char*>(kf.thumbnail.data()),
                kf.thumbnail.size() * sizeof(float));
     }
     const uint64_t hash = w.hash();
     os.write(reinterpret_cast<const char*>(&hash), sizeof(hash));
   });
+}
+
+void WriteMapFile(const std::string& path, const SavedMap& map) {
+  SavedMap header = map;
+  header.keyframes.clear();
+  WriteMapFile(path, header, map.keyframes);
 }
 
 SavedMap ReadMapFile(const std::string& path) {

@@ -87,6 +87,10 @@ struct SavedMap {
 // be written, a point's descriptor does not have descriptor_size floats or a keyframe's
 // thumbnail not thumbnail_width x thumbnail_height.
 void WriteMapFile(const std::string& path, const SavedMap& map);
+// The same with the keyframes beside the map (whose keyframes must be empty): for a caller that
+// holds them elsewhere and should not copy them.
+void WriteMapFile(const std::string& path, const SavedMap& map,
+                  const std::vector<SavedKeyframe>& keyframes);
 
 // Throws dala::Error naming the file and what is wrong: not a dala map, a version this build
 // does not read, truncated or corrupted (hash mismatch), or counts that do not fit the file.

@@ -8,13 +8,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.h"
-#include "core/io/atomic_file.h"
+#include "core/eval/chart_drawing.h"
 
 namespace dala::bench {
 namespace {
 
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 const cv::Scalar kText(40, 40, 40);
 const cv::Scalar kGrid(228, 228, 228);
 const cv::Scalar kAxis(90, 90, 90);
@@ -27,29 +25,12 @@ cv::Scalar SeriesColour(size_t i) {
   return kPalette[i % (sizeof(kPalette) / sizeof(kPalette[0]))];
 }
 
-double NiceStep(double range, int target) {
-  if (!(range > 0.0)) return 1.0;
-  const double raw = range / target;
-  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
-  const double r = raw / magnitude;
-  return (r < 1.5 ? 1.0 : r < 3.5 ? 2.0 : r < 7.5 ? 5.0 : 10.0) * magnitude;
-}
-
-std::string Tick(double v, double step) {
-  const int decimals = step >= 1.0 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.*f", decimals, std::abs(v) < step * 1e-6 ? 0.0 : v);
-  return buf;
-}
-
-cv::Size TextSize(const std::string& text, double scale) {
-  int baseline = 0;
-  return cv::getTextSize(text, kFont, scale, 1, &baseline);
-}
+using chart::NiceStep;
+using chart::TextSize;
 
 void Text(cv::Mat* img, const std::string& text, cv::Point at, double scale,
           const cv::Scalar& colour = kText, int thickness = 1) {
-  cv::putText(*img, text, at, kFont, scale, colour, thickness, cv::LINE_AA);
+  chart::PutText(img, text, at, scale, colour, thickness);
 }
 
 int LegendTextWidth(const std::vector<ChartSeries>& series) {
@@ -131,13 +112,13 @@ cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartO
        v += xs) {
     const int x = static_cast<int>(std::lround(px(v, y0).x));
     cv::line(img, {x, area.y}, {x, area.y + area.height}, kGrid, 1);
-    const std::string t = Tick(v, xs);
+    const std::string t = chart::TickLabel(v, xs);
     Text(&img, t, {x - TextSize(t, 0.42).width / 2, area.y + area.height + 18}, 0.42);
   }
   for (double v = std::ceil(y0 / ys) * ys; v <= y1 + 1e-9 * ys; v += ys) {
     const int y = static_cast<int>(std::lround(px(x0, v).y));
     cv::line(img, {area.x, y}, {area.x + area.width, y}, kGrid, 1);
-    const std::string t = Tick(v, ys);
+    const std::string t = chart::TickLabel(v, ys);
     Text(&img, t, {area.x - 8 - TextSize(t, 0.42).width, y + 5}, 0.42);
   }
   cv::rectangle(img, area, kAxis, 1);
@@ -187,21 +168,10 @@ cv::Mat RenderLineChart(const std::vector<ChartSeries>& series, const LineChartO
   return img;
 }
 
-namespace {
-
-void WritePng(const cv::Mat& img, const std::string& png_path) {
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", img, png)) throw Error() << png_path << ": cannot encode the PNG";
-  WriteFileAtomically(png_path, [&](std::ostream& os) {
-    os.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-  });
-}
-
-}  // namespace
 
 void DrawLineChart(const std::vector<ChartSeries>& series, const LineChartOptions& options,
                    const std::string& png_path) {
-  WritePng(RenderLineChart(series, options), png_path);
+  chart::WritePng(RenderLineChart(series, options), png_path);
 }
 
 void DrawStackedLineCharts(const std::vector<StackedChart>& charts, const std::string& png_path) {
@@ -224,7 +194,7 @@ void DrawStackedLineCharts(const std::vector<StackedChart>& charts, const std::s
   } else {
     cv::vconcat(images, stacked);
   }
-  WritePng(stacked, png_path);
+  chart::WritePng(stacked, png_path);
 }
 
 }  // namespace dala::bench
