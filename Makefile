@@ -21,8 +21,10 @@ configure: deps
 build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
+# After the suite: docs/reliability.md's table of end-to-end bounds must be the tests' bounds.
 test: build test-deps
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+	@python3 scripts/e2e_bounds_table.py --check docs/reliability.md $(BUILD_DIR)/Testing/Temporary/LastTest.log
 
 run: build
 	@bash scripts/run_default.sh $(BUILD_DIR) $(OUT)

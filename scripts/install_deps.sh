@@ -4,7 +4,8 @@
 #   scripts/install_deps.sh          the build (make run, make build)
 #   scripts/install_deps.sh --test   only what the tests need besides the build (make test): a
 #                                    single-node Slurm for the bench job array test
-#                                    (tests/tools/bench/slurm_bench_test.cc)
+#                                    (tests/tools/bench/slurm_bench_test.cc), python3 for the
+#                                    check of docs/reliability.md's bounds
 set -euo pipefail
 case "${1:-}" in
   "")
@@ -14,7 +15,7 @@ case "${1:-}" in
       nlohmann-json3-dev)
     WHAT="packages" ;;
   --test)
-    PACKAGES=(slurm-wlm munge)
+    PACKAGES=(slurm-wlm munge python3)
     WHAT="test packages" ;;
   *)
     echo "usage: $0 [--test]" >&2; exit 2 ;;

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <random>
 #include <sstream>
 #include <string>
@@ -68,6 +69,24 @@ inline Pose RandomPose(std::mt19937& rng, double rot_scale = 1.0, double trans_s
   Vector6d xi;
   for (int i = 0; i < 6; ++i) xi[i] = n(rng) * (i < 3 ? rot_scale : trans_scale);
   return ExpSE3(xi);
+}
+
+// An end-to-end accuracy bound, anchored to the best value recorded for it (it is not raised
+// when a change makes the result worse): EXPECT measured < 1.5 x best, and one line
+//   [ bound ] Suite.Test | quantity | measured | best | bound | unit
+// in the test's output, from which scripts/e2e_bounds_table.py writes docs/reliability.md's
+// table of bounds (and CI checks that table's bounds against these lines).
+inline void ExpectWithinBound(const std::string& quantity, double measured, double best,
+                              const std::string& unit) {
+  const double bound = 1.5 * best;
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::ostringstream line;
+  line.precision(6);
+  line << "[ bound ] " << info->test_suite_name() << "." << info->name() << " | " << quantity
+       << " | " << measured << " | " << best << " | " << bound << " | " << unit;
+  std::cout << line.str() << std::endl;
+  EXPECT_LT(measured, bound) << quantity << ": " << measured << " " << unit << ", bound 1.5 x "
+                             << best << " (the best recorded)";
 }
 
 #define EXPECT_POSE_NEAR(A, B, tol)                                                          \

@@ -7,6 +7,7 @@
 #include "backend/system.h"
 #include "core/eval/evaluate.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/test_util.h"
 
 namespace dala {
 namespace {
@@ -71,7 +72,8 @@ TEST(GlobalBaE2e, RefinesEveryKeyframeStereoAndMono) {
     const double refined = Ate(seq, run.refined, alignment);
     std::cout << "[ measured ] " << mode << " rover 150: ATE " << online << " m online, " << refined
               << " m after the global BA (" << run.refinement.report << ")" << std::endl;
-    EXPECT_LT(refined, 1.5 * (std::string(mode) == "mono" ? 0.0234 : 0.00479));
+    testing::ExpectWithinBound(std::string("ba/") + mode + " rover 150 after the global BA, ATE", refined,
+                               std::string(mode) == "mono" ? 0.0234 : 0.00479, "m");
     if (std::string(mode) == "stereo") {
       EXPECT_LE(refined, online);
     }
