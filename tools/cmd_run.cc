@@ -29,11 +29,20 @@
 #include "tools/stop_signal.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
+DECLARE_double(fps);     // tools/common_flags.cc
+DECLARE_string(times);  // tools/common_flags.cc
+DECLARE_string(right_folder);   // tools/common_flags.cc
+DECLARE_string(stereo_layout);  // tools/common_flags.cc
 DEFINE_string(config, "", "run: YAML file of options (see --dump_config for every key)");
 DEFINE_string(estimator, "", "run: ba (sliding-window bundle adjustment) or ekf (overrides config)");
 DEFINE_string(mode, "", "run: stereo or mono (overrides config)");
-DEFINE_string(format, "auto", "run: dataset format: auto, kitti, euroc, tum, synthetic");
-DEFINE_string(calibration, "", "run: calibration YAML overriding the dataset's (KITTI, TUM)");
+DEFINE_string(format, "auto",
+              "run: dataset format: auto, kitti, euroc, tum, synthetic, images, video");
+DEFINE_string(calibration, "",
+              "run: calibration file (OpenCV, ROS camera_info, Kalibr camchain or dala YAML): "
+              "required for an image folder or a video, overrides KITTI's and TUM's");
+DEFINE_string(ground_truth, "",
+              "run: ground truth of an image folder or video (TUM by time, KITTI by frame)");
 DEFINE_int32(first_frame, 0, "run: index of the first frame to process");
 DEFINE_int32(max_frames, 0, "run: process at most this many frames (0: all)");
 DEFINE_bool(dump_config, false, "run: print the effective options as YAML and exit");
@@ -171,6 +180,11 @@ int RunRun(const std::vector<std::string>& args) {
   DatasetOptions dataset_options;
   dataset_options.format = ParseDatasetFormat(FLAGS_format);
   dataset_options.calibration_yaml = FLAGS_calibration;
+  dataset_options.right_folder = FLAGS_right_folder;
+  dataset_options.times_file = FLAGS_times;
+  dataset_options.fps = FLAGS_fps;
+  dataset_options.stereo_layout = FLAGS_stereo_layout;
+  dataset_options.ground_truth = FLAGS_ground_truth;
   dataset_options.first_frame = FLAGS_first_frame;
   dataset_options.max_frames = FLAGS_max_frames;
   dataset_options.allow_missing_images = !FLAGS_strict;
@@ -488,9 +502,13 @@ const CommandRegistrar kRegistrar(
      "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
      "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
      "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-     "         [--map FILE] [--dump_config]\n\n"
+     "         [--map FILE] [--dump_config]\n"
+     "       dala run VIDEO|IMAGE_FOLDER --calibration FILE --out DIR [--mode mono]\n"
+     "         [--fps HZ] [--times FILE] [--right_folder DIR] [--stereo_layout side_by_side]\n"
+     "         [--ground_truth FILE]\n\n"
      "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
-     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
+     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder, a `dala synth` output, a\n"
+     "folder of images or a video file with its calibration: docs/datasets.md) and\n"
      "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
      "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
      "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"

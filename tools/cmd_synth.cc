@@ -12,6 +12,7 @@
 #include "tools/command.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
+DECLARE_double(fps);  // tools/common_flags.cc
 DEFINE_string(preset, "rover_loop",
               "scene and camera path: rover_loop, flight, rotation, fast, low_texture, small_loop, false_loop");
 DEFINE_int32(frames, 0, "number of frames (0 = the preset's default duration x fps)");
@@ -28,7 +29,6 @@ DEFINE_bool(blur, false, "motion blur (average of sub-frame renders over the exp
 DEFINE_double(exposure, 0.5, "exposure time as a fraction of the frame interval (with --blur)");
 DEFINE_double(brightness, 0.0,
               "amplitude of the global brightness change (image gain 1 +- this, slow sine)");
-DEFINE_double(fps, 10.0, "frame rate (Hz)");
 DEFINE_double(baseline, 0.4, "stereo baseline (m)");
 DEFINE_double(right_cx_error_px, 0.0,
               "render the right image with its principal point this many pixels off calib.txt's "
@@ -54,7 +54,7 @@ int RunSynth(const std::vector<std::string>& args) {
   options.motion_blur = FLAGS_blur;
   options.exposure_fraction = FLAGS_exposure;
   options.brightness_change = FLAGS_brightness;
-  options.fps = FLAGS_fps;
+  if (FLAGS_fps > 0) options.fps = FLAGS_fps;
   options.baseline = FLAGS_baseline;
   options.right_cx_error_px = FLAGS_right_cx_error_px;
   std::string why;
@@ -78,7 +78,7 @@ int RunSynth(const std::vector<std::string>& args) {
 std::string Usage() {
   std::ostringstream os;
   os << "dala synth --out DIR [--preset NAME] [--frames N] [--seed S] [--mono] [--points] "
-        "[--odometry] [--width W --height H] [--noise SIGMA] [--blur] [--brightness A] ...\n\n"
+        "[--odometry] [--width W --height H] [--noise SIGMA] [--blur] [--brightness A] [--fps HZ] ...\n\n"
         "Renders a synthetic sequence of a procedural textured world with exact ground truth\n"
         "into a KITTI-like folder: image_0/ (left), image_1/ (right), calib.txt, times.txt,\n"
         "poses.txt (T_w_c0), synth.yaml, optional points.ply and odometry.txt.\n"
