@@ -4,7 +4,8 @@
 #   scripts/install_deps.sh          the build (make run, make build)
 #   scripts/install_deps.sh --test   only what the tests need besides the build (make test): a
 #                                    single-node Slurm for the bench job array test
-#                                    (tests/tools/bench/slurm_bench_test.cc)
+#                                    (tests/tools/bench/slurm_bench_test.cc), and opencv-doc for
+#                                    its chessboard images (tests/tools/calibrate_cli_test.cc)
 set -euo pipefail
 case "${1:-}" in
   "")
@@ -14,7 +15,7 @@ case "${1:-}" in
       nlohmann-json3-dev)
     WHAT="packages" ;;
   --test)
-    PACKAGES=(slurm-wlm munge)
+    PACKAGES=(slurm-wlm munge opencv-doc)
     WHAT="test packages" ;;
   *)
     echo "usage: $0 [--test]" >&2; exit 2 ;;
