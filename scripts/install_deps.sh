@@ -12,7 +12,7 @@ case "${1:-}" in
     PACKAGES=(cmake make g++ ccache pkg-config
       libceres-dev libeigen3-dev libopencv-dev libsuitesparse-dev
       libgflags-dev libgoogle-glog-dev libgtest-dev libgmock-dev libbenchmark-dev
-      nlohmann-json3-dev)
+      nlohmann-json3-dev librosbag-dev libsensor-msgs-dev)
     WHAT="packages" ;;
   --test)
     PACKAGES=(slurm-wlm munge opencv-doc)

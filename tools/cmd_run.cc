@@ -37,10 +37,12 @@ DEFINE_string(config, "", "run: YAML file of options (see --dump_config for ever
 DEFINE_string(estimator, "", "run: ba (sliding-window bundle adjustment) or ekf (overrides config)");
 DEFINE_string(mode, "", "run: stereo or mono (overrides config)");
 DEFINE_string(format, "auto",
-              "run: dataset format: auto, kitti, euroc, tum, synthetic, images, video");
+              "run: dataset format: auto, kitti, euroc, tum, synthetic, images, video, bag");
 DEFINE_string(calibration, "",
               "run: calibration file (OpenCV, ROS camera_info, Kalibr camchain or dala YAML): "
               "required for an image folder or a video, overrides KITTI's and TUM's");
+DEFINE_string(topic, "", "run: image topic of a ROS bag (empty: its only one)");
+DEFINE_string(right_topic, "", "run: right camera's image topic of a ROS bag (stereo)");
 DEFINE_string(ground_truth, "",
               "run: ground truth of an image folder or video (TUM by time, KITTI by frame)");
 DEFINE_int32(first_frame, 0, "run: index of the first frame to process");
@@ -185,6 +187,8 @@ int RunRun(const std::vector<std::string>& args) {
   dataset_options.fps = FLAGS_fps;
   dataset_options.stereo_layout = FLAGS_stereo_layout;
   dataset_options.ground_truth = FLAGS_ground_truth;
+  dataset_options.topic = FLAGS_topic;
+  dataset_options.right_topic = FLAGS_right_topic;
   dataset_options.first_frame = FLAGS_first_frame;
   dataset_options.max_frames = FLAGS_max_frames;
   dataset_options.allow_missing_images = !FLAGS_strict;
@@ -505,7 +509,9 @@ const CommandRegistrar kRegistrar(
      "         [--map FILE] [--dump_config]\n"
      "       dala run VIDEO|IMAGE_FOLDER --calibration FILE --out DIR [--mode mono]\n"
      "         [--fps HZ] [--times FILE] [--right_folder DIR] [--stereo_layout side_by_side]\n"
-     "         [--ground_truth FILE]\n\n"
+     "         [--ground_truth FILE]\n"
+     "       dala run FILE.bag --topic /cam0/image_raw [--right_topic /cam1/image_raw]\n"
+     "         [--calibration FILE] --out DIR (a ROS 1 bag; CameraInfo from the bag when present)\n\n"
      "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
      "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder, a `dala synth` output, a\n"
      "folder of images or a video file with its calibration: docs/datasets.md) and\n"

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/io/bag_dataset.h"
 #include "core/io/euroc_dataset.h"
 #include "core/io/image_folder_dataset.h"
 #include "core/io/image_sequence.h"
@@ -32,6 +33,8 @@ const char* DatasetFormatName(DatasetFormat format) {
       return "images";
     case DatasetFormat::kVideo:
       return "video";
+    case DatasetFormat::kBag:
+      return "bag";
   }
   return "?";
 }
@@ -39,11 +42,11 @@ const char* DatasetFormatName(DatasetFormat format) {
 DatasetFormat ParseDatasetFormat(const std::string& name) {
   for (DatasetFormat f : {DatasetFormat::kAuto, DatasetFormat::kKitti, DatasetFormat::kEuroc,
                           DatasetFormat::kTum, DatasetFormat::kSynthetic, DatasetFormat::kImages,
-                          DatasetFormat::kVideo}) {
+                          DatasetFormat::kVideo, DatasetFormat::kBag}) {
     if (name == DatasetFormatName(f)) return f;
   }
   throw Error() << "unknown dataset format '" << name
-                << "': use one of auto, kitti, euroc, tum, synthetic, images, video";
+                << "': use one of auto, kitti, euroc, tum, synthetic, images, video, bag";
 }
 
 bool DatasetOptions::IsValid(std::string* why) const {
@@ -64,7 +67,9 @@ bool DatasetOptions::IsValid(std::string* why) const {
 }
 
 DatasetFormat DetectDatasetFormat(const std::string& folder) {
-  if (fs::is_regular_file(folder)) return DatasetFormat::kVideo;
+  if (fs::is_regular_file(folder)) {
+    return fs::path(folder).extension() == ".bag" ? DatasetFormat::kBag : DatasetFormat::kVideo;
+  }
   if (!fs::is_directory(folder)) {
     throw Error() << "missing dataset folder or video '" << folder << "': check the path";
   }
@@ -87,7 +92,8 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& folder, const DatasetOpt
   if (!options.IsValid(&why)) throw Error() << "invalid dataset options: " << why;
   const DatasetFormat format =
       options.format == DatasetFormat::kAuto ? DetectDatasetFormat(folder) : options.format;
-  const bool images = format == DatasetFormat::kImages, video = format == DatasetFormat::kVideo;
+  const bool images = format == DatasetFormat::kImages, bag = format == DatasetFormat::kBag;
+  const bool video = format == DatasetFormat::kVideo;
   const auto refuse = [&](bool used, const char* option, const char* applies_to) {
     if (used) {
       throw Error() << "option " << option << " applies to " << applies_to << ", not to the "
@@ -99,8 +105,11 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& folder, const DatasetOpt
   refuse(!images && !options.times_file.empty(), "times_file (--times)", "image folders");
   refuse(!images && !video && options.fps > 0, "fps (--fps)", "image folders and videos");
   refuse(!video && options.stereo_layout != "mono", "stereo_layout (--stereo_layout)", "videos");
-  refuse(!images && !video && !options.ground_truth.empty(), "ground_truth (--ground_truth)",
-         "image folders and videos (the datasets bring their own)");
+  refuse(!images && !video && !bag && !options.ground_truth.empty(),
+         "ground_truth (--ground_truth)",
+         "image folders, videos and bags (the datasets bring their own)");
+  refuse(!bag && !options.topic.empty(), "topic (--topic)", "bags");
+  refuse(!bag && !options.right_topic.empty(), "right_topic (--right_topic)", "bags");
   ImageSequence sequence;
   switch (format) {
     case DatasetFormat::kKitti:
@@ -120,6 +129,8 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& folder, const DatasetOpt
       break;
     case DatasetFormat::kVideo:
       return OpenVideoDataset(folder, options);
+    case DatasetFormat::kBag:
+      return OpenBagDataset(folder, options);
     case DatasetFormat::kAuto:
       break;
   }

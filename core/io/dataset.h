@@ -32,11 +32,11 @@
 namespace dala {
 
 // kImages: a plain folder of images with a calibration file (core/io/image_folder_dataset.h);
-// kVideo: a video file (core/io/video_dataset.h).
-enum class DatasetFormat { kAuto, kKitti, kEuroc, kTum, kSynthetic, kImages, kVideo };
+// kVideo: a video file (core/io/video_dataset.h); kBag: a ROS 1 bag (core/io/bag_dataset.h).
+enum class DatasetFormat { kAuto, kKitti, kEuroc, kTum, kSynthetic, kImages, kVideo, kBag };
 
 const char* DatasetFormatName(DatasetFormat format);
-// Parses "auto", "kitti", "euroc", "tum", "synthetic", "images", "video"; throws dala::Error naming the accepted
+// Parses "auto", "kitti", "euroc", "tum", "synthetic", "images", "video", "bag"; throws dala::Error naming the accepted
 // values.
 DatasetFormat ParseDatasetFormat(const std::string& name);
 
@@ -98,7 +98,10 @@ struct DatasetOptions {
   double fps = 0;
   // Videos: "mono" (one camera) or "side_by_side" (left and right halves of each frame).
   std::string stereo_layout = "mono";
-  // Image folders and videos: a ground-truth trajectory of the (raw) left camera: TUM (matched
+  // Bags: the image topic (empty: the bag's only one) and the right camera's (empty: mono).
+  std::string topic;
+  std::string right_topic;
+  // Image folders, videos and bags: a ground-truth trajectory of the (raw) left camera: TUM (matched
   // by time) or KITTI (one pose per image or video frame, in order). Empty: none.
   std::string ground_truth;
   // Skip the frames before this index.
@@ -124,7 +127,7 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& folder,
 
 // Detects the format from the folder content: `synth.yaml` -> synthetic, `image_0/` -> KITTI,
 // `mav0/` or `cam0/sensor.yaml` -> EuRoC, `rgb.txt` -> TUM, image files (png, jpg) -> images;
-// a file (not a folder) -> video. Throws dala::Error listing what was looked for when nothing
+// a file named *.bag -> bag, another file -> video. Throws dala::Error listing what was looked for when nothing
 // matches.
 DatasetFormat DetectDatasetFormat(const std::string& folder);
 
