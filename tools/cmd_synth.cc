@@ -82,6 +82,7 @@ int RunSynth(const std::vector<std::string>& args) {
   options.motion_blur = FLAGS_blur;
   options.exposure_fraction = FLAGS_exposure;
   options.brightness_change = FLAGS_brightness;
+  if (FLAGS_fps < 0) throw Error() << "--fps " << FLAGS_fps << " must be > 0 (0: 10 Hz)";
   if (FLAGS_fps > 0) options.fps = FLAGS_fps;
   options.baseline = FLAGS_baseline;
   options.right_cx_error_px = FLAGS_right_cx_error_px;
