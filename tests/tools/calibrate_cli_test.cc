@@ -12,6 +12,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "core/io/camera_calibration.h"
 #include "tests/test_util.h"
@@ -160,6 +161,33 @@ TEST(CalibrateCli, StereoBaselineConsistentWithTheBoardPoses) {
   // dala run's path: the pair is rectified at open.
   const Rectification r = MakeRectification(c, /*stereo=*/true);
   EXPECT_NEAR(r.rig.baseline, t.norm(), 1e-6);
+}
+
+TEST(CalibrateCli, FromAVideoOfTheBoard) {
+  SKIP_WITHOUT_OPENCV_DOC();
+  TempDir dir;
+  CopyBoardImages(dir);
+  // The 13 views as the frames of an MJPEG video, each twice: --frame_step 2 takes one of each.
+  {
+    cv::VideoWriter writer(dir / "board.avi", cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 5.0,
+                           cv::Size(640, 480));
+    ASSERT_TRUE(writer.isOpened());
+    std::vector<std::string> files;
+    for (const auto& e : fs::directory_iterator(dir / "left")) files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+    for (const std::string& f : files) {
+      const cv::Mat image = cv::imread(f);
+      writer.write(image);
+      writer.write(image);
+    }
+  }
+  const Cli cli =
+      Calibrate((dir / "board.avi") + " --frame_step 2 --out " + (dir / "video.yml"), dir);
+  ASSERT_EQ(cli.status, 0) << cli.out;
+  EXPECT_THAT(cli.out, HasSubstr("views       13 used, 0 rejected, of 13"));
+  const CameraCalibration c = ReadCameraCalibration(dir / "video.yml");
+  EXPECT_NEAR(c.cam0.fx, 535.9, 0.01 * 535.9);  // As from the images (lossy frames).
+  EXPECT_NEAR(c.cam0.cx, 342.3, 2.0);
 }
 
 TEST(CalibrateCli, TooFewViewsIsAnErrorSayingWhatToDo) {
