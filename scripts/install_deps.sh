@@ -4,18 +4,19 @@
 #   scripts/install_deps.sh          the build (make run, make build)
 #   scripts/install_deps.sh --test   only what the tests need besides the build (make test): a
 #                                    single-node Slurm for the bench job array test
-#                                    (tests/tools/bench/slurm_bench_test.cc), python3 for the
-#                                    check of docs/reliability.md's bounds
+#                                    (tests/tools/bench/slurm_bench_test.cc), opencv-doc for
+#                                    its chessboard images (tests/tools/calibrate_cli_test.cc),
+#                                    python3 for the check of docs/reliability.md's bounds
 set -euo pipefail
 case "${1:-}" in
   "")
     PACKAGES=(cmake make g++ ccache pkg-config
       libceres-dev libeigen3-dev libopencv-dev libsuitesparse-dev
       libgflags-dev libgoogle-glog-dev libgtest-dev libgmock-dev libbenchmark-dev
-      nlohmann-json3-dev)
+      nlohmann-json3-dev librosbag-dev libsensor-msgs-dev)
     WHAT="packages" ;;
   --test)
-    PACKAGES=(slurm-wlm munge python3)
+    PACKAGES=(slurm-wlm munge opencv-doc python3)
     WHAT="test packages" ;;
   *)
     echo "usage: $0 [--test]" >&2; exit 2 ;;

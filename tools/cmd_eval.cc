@@ -24,9 +24,7 @@ DEFINE_double(max_diff, 0.01,
               "associated (TUM/evo association)");
 DEFINE_string(plot, "", "Write a PNG plot (top view and ATE along the path) to this file");
 DECLARE_bool(json);  // tools/common_flags.cc
-DEFINE_string(times, "",
-              "KITTI times.txt (one time in seconds per line) applied to the KITTI "
-              "file(s), which have no stamps, so that they associate by time");
+DECLARE_string(times);  // tools/common_flags.cc
 DEFINE_string(format_gt, "auto", "Format of the ground truth file: auto, tum, kitti, euroc");
 DEFINE_string(format_est, "auto", "Format of the estimate file: auto, tum, kitti, euroc");
 

@@ -29,11 +29,22 @@
 #include "tools/stop_signal.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
+DECLARE_double(fps);     // tools/common_flags.cc
+DECLARE_string(times);  // tools/common_flags.cc
+DECLARE_string(right_folder);   // tools/common_flags.cc
+DECLARE_string(stereo_layout);  // tools/common_flags.cc
 DEFINE_string(config, "", "run: YAML file of options (--dump_config prints them; docs/options.md)");
 DEFINE_string(estimator, "", "run: ba (sliding-window bundle adjustment) or ekf (overrides config)");
 DEFINE_string(mode, "", "run: stereo or mono (overrides config)");
-DEFINE_string(format, "auto", "run: dataset format: auto, kitti, euroc, tum, synthetic");
-DEFINE_string(calibration, "", "run: calibration YAML overriding the dataset's (KITTI, TUM)");
+DEFINE_string(format, "auto",
+              "run: dataset format: auto, kitti, euroc, tum, synthetic, images, video, bag");
+DEFINE_string(calibration, "",
+              "run: calibration file (OpenCV, ROS camera_info, Kalibr camchain or dala YAML): "
+              "required for an image folder or a video, overrides KITTI's and TUM's");
+DEFINE_string(topic, "", "run: image topic of a ROS bag (empty: its only one)");
+DEFINE_string(right_topic, "", "run: right camera's image topic of a ROS bag (stereo)");
+DEFINE_string(ground_truth, "",
+              "run: ground truth of an image folder or video (TUM by time, KITTI by frame)");
 DEFINE_int32(first_frame, 0, "run: index of the first frame to process");
 DEFINE_int32(max_frames, 0, "run: process at most this many frames (0: all)");
 DEFINE_bool(dump_config, false,
@@ -175,6 +186,13 @@ int RunRun(const std::vector<std::string>& args) {
   DatasetOptions dataset_options;
   dataset_options.format = ParseDatasetFormat(FLAGS_format);
   dataset_options.calibration_yaml = FLAGS_calibration;
+  dataset_options.right_folder = FLAGS_right_folder;
+  dataset_options.times_file = FLAGS_times;
+  dataset_options.fps = FLAGS_fps;
+  dataset_options.stereo_layout = FLAGS_stereo_layout;
+  dataset_options.ground_truth = FLAGS_ground_truth;
+  dataset_options.topic = FLAGS_topic;
+  dataset_options.right_topic = FLAGS_right_topic;
   dataset_options.first_frame = FLAGS_first_frame;
   dataset_options.max_frames = FLAGS_max_frames;
   dataset_options.allow_missing_images = !FLAGS_strict;
@@ -492,9 +510,15 @@ const CommandRegistrar kRegistrar(
      "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
      "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
      "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-     "         [--map FILE] [--dump_config | --dump_config_all]\n\n"
+     "         [--map FILE] [--dump_config | --dump_config_all]\n"
+     "       dala run VIDEO|IMAGE_FOLDER --calibration FILE --out DIR [--mode mono]\n"
+     "         [--fps HZ] [--times FILE] [--right_folder DIR] [--stereo_layout side_by_side]\n"
+     "         [--ground_truth FILE]\n"
+     "       dala run FILE.bag --topic /cam0/image_raw [--right_topic /cam1/image_raw]\n"
+     "         [--calibration FILE] --out DIR (a ROS 1 bag; CameraInfo from the bag when present)\n\n"
      "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
-     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder or a `dala synth` output) and\n"
+     "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder, a `dala synth` output, a\n"
+     "folder of images or a video file with its calibration: docs/datasets.md) and\n"
      "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
      "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
      "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"

@@ -12,6 +12,7 @@
 #include "tools/command.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
+DECLARE_double(fps);  // tools/common_flags.cc
 DEFINE_string(preset, "rover_loop",
               "scene and camera path: rover_loop, flight, rotation, fast, low_texture, small_loop, false_loop");
 DEFINE_int32(frames, 0, "number of frames (0 = the preset's default duration x fps)");
@@ -28,15 +29,42 @@ DEFINE_bool(blur, false, "motion blur (average of sub-frame renders over the exp
 DEFINE_double(exposure, 0.5, "exposure time as a fraction of the frame interval (with --blur)");
 DEFINE_double(brightness, 0.0,
               "amplitude of the global brightness change (image gain 1 +- this, slow sine)");
-DEFINE_double(fps, 10.0, "frame rate (Hz)");
 DEFINE_double(baseline, 0.4, "stereo baseline (m)");
 DEFINE_double(right_cx_error_px, 0.0,
               "render the right image with its principal point this many pixels off calib.txt's "
               "(every disparity that much too small, as a real rig's rectification error leaves "
               "it; KITTI 06: ~0.3): a rig to test the disparity-offset calibration on");
 
+DEFINE_string(distortion, "",
+              "render through a radial-tangential lens: 'radtan' (EuRoC-like k1 -0.28 k2 0.07 "
+              "p1 2e-4 p2 2e-5) or its coefficients 'k1,k2,p1,p2[,k3]'; calibration/ then "
+              "describes the lens");
+DEFINE_string(fisheye, "",
+              "render through a fisheye (equidistant, Kannala-Brandt) lens: 'equidistant' "
+              "(k 0.02 -0.01 0.005 -0.001) or its coefficients 'k1,k2,k3,k4'");
+
 namespace dala {
 namespace {
+
+// "radtan" / "equidistant" (the defaults) or a comma-separated list of numbers.
+std::vector<double> LensCoefficientsFlag(const std::string& flag, const std::string& value,
+                                         const char* model_name) {
+  if (value == model_name) return {};
+  std::vector<double> k;
+  std::stringstream ss(value);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      k.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw Error() << "--" << flag << " '" << value << "': expected '" << model_name
+                    << "' or comma-separated numbers";
+    }
+  }
+  return k;
+}
 
 int RunSynth(const std::vector<std::string>& args) {
   if (!args.empty()) throw Error() << "unexpected argument '" << args[0] << "'; see --help";
@@ -54,9 +82,21 @@ int RunSynth(const std::vector<std::string>& args) {
   options.motion_blur = FLAGS_blur;
   options.exposure_fraction = FLAGS_exposure;
   options.brightness_change = FLAGS_brightness;
-  options.fps = FLAGS_fps;
+  if (FLAGS_fps < 0) throw Error() << "--fps " << FLAGS_fps << " must be > 0 (0: 10 Hz)";
+  if (FLAGS_fps > 0) options.fps = FLAGS_fps;
   options.baseline = FLAGS_baseline;
   options.right_cx_error_px = FLAGS_right_cx_error_px;
+  if (!FLAGS_distortion.empty() && !FLAGS_fisheye.empty()) {
+    throw Error() << "--distortion and --fisheye are two lenses: give one";
+  }
+  if (!FLAGS_distortion.empty()) {
+    options.lens = "radtan";
+    options.lens_coefficients = LensCoefficientsFlag("distortion", FLAGS_distortion, "radtan");
+  }
+  if (!FLAGS_fisheye.empty()) {
+    options.lens = "fisheye";
+    options.lens_coefficients = LensCoefficientsFlag("fisheye", FLAGS_fisheye, "equidistant");
+  }
   std::string why;
   if (!options.IsValid(&why)) throw Error() << "invalid option: " << why;
 
@@ -78,10 +118,14 @@ int RunSynth(const std::vector<std::string>& args) {
 std::string Usage() {
   std::ostringstream os;
   os << "dala synth --out DIR [--preset NAME] [--frames N] [--seed S] [--mono] [--points] "
-        "[--odometry] [--width W --height H] [--noise SIGMA] [--blur] [--brightness A] ...\n\n"
+        "[--odometry] [--width W --height H] [--noise SIGMA] [--blur] [--brightness A] [--fps HZ]\n"
+        "           [--distortion radtan|K1,K2,P1,P2[,K3] | --fisheye equidistant|K1,K2,K3,K4] ...\n\n"
         "Renders a synthetic sequence of a procedural textured world with exact ground truth\n"
         "into a KITTI-like folder: image_0/ (left), image_1/ (right), calib.txt, times.txt,\n"
-        "poses.txt (T_w_c0), synth.yaml, optional points.ply and odometry.txt.\n"
+        "poses.txt (T_w_c0), synth.yaml, optional points.ply and odometry.txt, and calibration/\n"
+        "with the cameras in each calibration format `dala run --calibration` reads (OpenCV,\n"
+        "Kalibr, ROS camera_info, dala's own). With --distortion or --fisheye the images are\n"
+        "rendered through that lens; `dala run` then undistorts them with calibration/kalibr.yaml.\n"
         "World frame: x east, y north, z up. See docs/synthetic.md.\n\npresets:\n";
   for (const auto& p : sim::Presets()) {
     os << "  " << p.name << std::string(p.name.size() < 12 ? 12 - p.name.size() : 1, ' ')

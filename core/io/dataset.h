@@ -31,10 +31,12 @@
 
 namespace dala {
 
-enum class DatasetFormat { kAuto, kKitti, kEuroc, kTum, kSynthetic };
+// kImages: a plain folder of images with a calibration file (core/io/image_folder_dataset.h);
+// kVideo: a video file (core/io/video_dataset.h); kBag: a ROS 1 bag (core/io/bag_dataset.h).
+enum class DatasetFormat { kAuto, kKitti, kEuroc, kTum, kSynthetic, kImages, kVideo, kBag };
 
 const char* DatasetFormatName(DatasetFormat format);
-// Parses "auto", "kitti", "euroc", "tum", "synthetic"; throws dala::Error naming the accepted
+// Parses "auto", "kitti", "euroc", "tum", "synthetic", "images", "video", "bag"; throws dala::Error naming the accepted
 // values.
 DatasetFormat ParseDatasetFormat(const std::string& name);
 
@@ -78,10 +80,30 @@ struct DatasetOptions {
   DatasetFormat format = DatasetFormat::kAuto;
   // Read only the left camera of a stereo dataset (the rig then has baseline 0).
   bool force_mono = false;
-  // A YAML file (fx fy cx cy width height [baseline] [k1 k2 p1 p2 k3]) that replaces the
-  // dataset's calibration (KITTI calib.txt, synthetic, TUM intrinsics). Not used for EuRoC, whose
-  // sensor.yaml files are needed for rectification. Empty: the dataset's own calibration.
+  // A calibration file in any format core/io/camera_calibration.h reads (OpenCV, ROS
+  // camera_info, Kalibr camchain, dala's own YAML), detected by content. It replaces the
+  // dataset's calibration (KITTI calib.txt, synthetic, TUM intrinsics) and is required for image
+  // folders and videos; raw images are undistorted (mono) or rectified (stereo) at open. Not
+  // used for EuRoC, whose sensor.yaml files are needed for rectification. Empty: the dataset's
+  // own calibration.
   std::string calibration_yaml;
+  // Image folders: the right camera's folder (empty: monocular). Its images pair with the left
+  // ones by file name, or by order when the names differ (then the counts must be equal).
+  std::string right_folder;
+  // Image folders: a file of frame times in seconds, one per line (KITTI times.txt); empty:
+  // the folder's times.txt if present, else `fps`, else times in the file names.
+  std::string times_file;
+  // Image folders and videos: frame rate (Hz) giving frame i the time i / fps; 0: times from
+  // the times file, the file names or the video container.
+  double fps = 0;
+  // Videos: "mono" (one camera) or "side_by_side" (left and right halves of each frame).
+  std::string stereo_layout = "mono";
+  // Bags: the image topic (empty: the bag's only one) and the right camera's (empty: mono).
+  std::string topic;
+  std::string right_topic;
+  // Image folders, videos and bags: a ground-truth trajectory of the (raw) left camera: TUM (matched
+  // by time) or KITTI (one pose per image or video frame, in order). Empty: none.
+  std::string ground_truth;
   // Skip the frames before this index.
   int first_frame = 0;
   // Yield at most this many frames; 0 for all.
@@ -99,13 +121,14 @@ struct DatasetOptions {
   bool IsValid(std::string* why) const;
 };
 
-// Opens a dataset folder. Throws dala::Error on invalid options or a malformed folder.
+// Opens a dataset folder or a video file. Throws dala::Error on invalid options or a malformed folder.
 std::unique_ptr<Dataset> OpenDataset(const std::string& folder,
                                      const DatasetOptions& options = DatasetOptions());
 
 // Detects the format from the folder content: `synth.yaml` -> synthetic, `image_0/` -> KITTI,
-// `mav0/` or `cam0/sensor.yaml` -> EuRoC, `rgb.txt` -> TUM. Throws dala::Error listing what was
-// looked for when nothing matches.
+// `mav0/` or `cam0/sensor.yaml` -> EuRoC, `rgb.txt` -> TUM, image files (png, jpg) -> images;
+// a file named *.bag -> bag, another file -> video. Throws dala::Error listing what was looked for when nothing
+// matches.
 DatasetFormat DetectDatasetFormat(const std::string& folder);
 
 }  // namespace dala

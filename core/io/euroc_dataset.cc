@@ -4,9 +4,9 @@
 
 #include <filesystem>
 #include <map>
-#include <opencv2/calib3d.hpp>
 
 #include "core/config.h"
+#include "core/io/camera_calibration.h"
 #include "core/error.h"
 #include "core/io/text_lines.h"
 #include "core/io/trajectory_io.h"
@@ -55,12 +55,16 @@ std::vector<CsvImage> ReadImageCsv(const std::string& cam_dir) {
   return images;
 }
 
-cv::Mat CvK(const PinholeCamera& c) {
-  return (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
-}
-cv::Mat CvD(const PinholeCamera& c) {
-  return (cv::Mat_<double>(1, 5) << c.distortion[0], c.distortion[1], c.distortion[2],
-          c.distortion[3], c.distortion[4]);
+RawCamera RawCameraOf(const PinholeCamera& c) {
+  RawCamera raw;
+  raw.width = c.width;
+  raw.height = c.height;
+  raw.fx = c.fx;
+  raw.fy = c.fy;
+  raw.cx = c.cx;
+  raw.cy = c.cy;
+  raw.distortion = c.distortion;
+  return raw;
 }
 
 std::vector<double> RequireNumbers(const ConfigNode& node, const char* key, size_t min_size,
@@ -172,41 +176,27 @@ ImageSequence ReadEurocSequence(const std::string& folder, const DatasetOptions&
                     << "read the sequence as monocular (force_mono / --mode mono)";
     }
 
-    // OpenCV's stereo extrinsics map cam0 to cam1: p_c1 = R p_c0 + T, i.e. T_c1_c0.
-    const Pose T_c1_c0 = cam1.T_b_c.inverse() * cam0.T_b_c;
-    cv::Mat R(3, 3, CV_64F), T(3, 1, CV_64F);
-    for (int r = 0; r < 3; ++r) {
-      T.at<double>(r) = T_c1_c0.translation()[r];
-      for (int c = 0; c < 3; ++c) R.at<double>(r, c) = T_c1_c0.linear()(r, c);
+    // OpenCV's stereo extrinsics map cam0 to cam1: p_c1 = R p_c0 + T, i.e. T_c1_c0. The pair is
+    // rectified as every raw pair is (MakeRectification: cv::stereoRectify, alpha 0).
+    CameraCalibration calibration;
+    calibration.path = cam0_dir + "/sensor.yaml";
+    calibration.cam0 = RawCameraOf(cam0.camera);
+    calibration.cam1 = RawCameraOf(cam1.camera);
+    calibration.T_c1_c0 = cam1.T_b_c.inverse() * cam0.T_b_c;
+    Rectification rect;
+    try {
+      rect = MakeRectification(calibration, /*stereo=*/true);
+    } catch (const Error& e) {
+      // (The sizes and lens models match: what fails is the right camera's side.)
+      throw Error() << mav0 << ": cam1 is not to the right of cam0 after rectification: check "
+                    << "T_BS in the sensor.yaml files (" << e.message() << ")";
     }
-    cv::Mat R1, R2, P1, P2, Q;
-    cv::stereoRectify(CvK(cam0.camera), CvD(cam0.camera), CvK(cam1.camera), CvD(cam1.camera),
-                      seq.raw_size, R, T, R1, R2, P1, P2, Q, cv::CALIB_ZERO_DISPARITY,
-                      /*alpha=*/0.0, seq.raw_size);
-    cv::initUndistortRectifyMap(CvK(cam0.camera), CvD(cam0.camera), R1, P1, seq.raw_size, CV_16SC2,
-                                seq.left_map1, seq.left_map2);
-    cv::initUndistortRectifyMap(CvK(cam1.camera), CvD(cam1.camera), R2, P2, seq.raw_size, CV_16SC2,
-                                seq.right_map1, seq.right_map2);
-    PinholeCamera& rect = seq.rig.left;
-    rect.width = seq.raw_size.width;
-    rect.height = seq.raw_size.height;
-    rect.fx = P1.at<double>(0, 0);
-    rect.fy = P1.at<double>(1, 1);
-    rect.cx = P1.at<double>(0, 2);
-    rect.cy = P1.at<double>(1, 2);
-    // P2 = K_rect [I | (-b, 0, 0)] in the rectified left frame.
-    seq.rig.baseline = -P2.at<double>(0, 3) / P2.at<double>(0, 0);
-    if (!(seq.rig.baseline > 0)) {
-      throw Error() << mav0 << ": cam1 is not to the right of cam0 after rectification (baseline "
-                    << seq.rig.baseline << " m): check T_BS in the sensor.yaml files";
-    }
-    // R1 rotates raw cam0 coordinates into the rectified frame: p_c0rect = R1 p_c0.
-    Eigen::Matrix3d R1e;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) R1e(r, c) = R1.at<double>(r, c);
-    }
-    T_c0_c0rect =
-        Orthonormalized(MakePose(Eigen::Matrix3d(R1e.transpose()), Eigen::Vector3d::Zero()));
+    seq.rig = rect.rig;
+    seq.left_map1 = rect.left_map1;
+    seq.left_map2 = rect.left_map2;
+    seq.right_map1 = rect.right_map1;
+    seq.right_map2 = rect.right_map2;
+    T_c0_c0rect = rect.T_c0_c0rect;
   } else {
     for (const CsvImage& image : images0) {
       seq.t_ns.push_back(image.t_ns);

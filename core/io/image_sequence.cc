@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/io/trajectory_io.h"
 
 namespace dala {
 namespace {
@@ -185,6 +186,41 @@ std::vector<std::optional<Pose>> GroundTruthAtTimes(const Trajectory& ground_tru
     out[i] = InterpolatePose(a.T_w_c, b.T_w_c, s);
   }
   return out;
+}
+
+std::vector<std::optional<Pose>> ReadGroundTruthFile(const std::string& path,
+                                                     const std::vector<int64_t>& t_ns,
+                                                     const DatasetOptions& options,
+                                                     const Pose& T_c0_c0rect) {
+  RequireFile(path, "the ground truth (--ground_truth)");
+  const Trajectory gt = ReadTrajectory(path);
+  std::vector<std::optional<Pose>> out;
+  if (!gt.has_timestamps) {
+    if (gt.size() < t_ns.size()) {
+      throw Error() << path << " has " << gt.size() << " poses for " << t_ns.size()
+                    << " frames: a KITTI ground truth needs one pose per frame, in order (or "
+                    << "give a TUM file with times)";
+    }
+    for (size_t i = 0; i < t_ns.size(); ++i) out.push_back(gt.poses[i].T_w_c);
+  } else {
+    out = GroundTruthAtTimes(gt, t_ns, NsFromSeconds(options.max_ground_truth_gap_s));
+  }
+  for (auto& T : out) {
+    if (T) T = *T * T_c0_c0rect;
+  }
+  return out;
+}
+
+Pose ApplyCalibration(const CameraCalibration& calibration, bool stereo, ImageSequence* seq) {
+  Rectification r = MakeRectification(calibration, stereo);
+  seq->rig = r.rig;
+  seq->left_map1 = r.left_map1;
+  seq->left_map2 = r.left_map2;
+  seq->right_map1 = r.right_map1;
+  seq->right_map2 = r.right_map2;
+  seq->raw_size = cv::Size(calibration.cam0.width, calibration.cam0.height);
+  seq->raw_size_source = "the calibration " + calibration.path;
+  return r.T_c0_c0rect;
 }
 
 PinholeCamera MakeUndistortionMaps(const PinholeCamera& camera, cv::Mat* map1, cv::Mat* map2) {

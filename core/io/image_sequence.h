@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/io/camera_calibration.h"
 #include "core/io/dataset.h"
 #include "core/trajectory.h"
 
@@ -76,6 +77,22 @@ std::vector<std::optional<Pose>> GroundTruthAtTimes(const Trajectory& ground_tru
 // Maps that undistort `camera` into a distortion-free camera of the same size (returned), with
 // cv::getOptimalNewCameraMatrix(alpha = 0: only valid pixels, no black border).
 PinholeCamera MakeUndistortionMaps(const PinholeCamera& camera, cv::Mat* map1, cv::Mat* map2);
+
+// A user's ground truth file (DatasetOptions::ground_truth) of the raw left camera, at the
+// frame times t_ns: TUM (or EuRoC csv) by time (GroundTruthAtTimes), KITTI by frame index (it
+// needs at least as many rows as frames). Each pose is returned as T_w_c0 * T_c0_c0rect.
+// Throws dala::Error naming the file.
+std::vector<std::optional<Pose>> ReadGroundTruthFile(const std::string& path,
+                                                     const std::vector<int64_t>& t_ns,
+                                                     const DatasetOptions& options,
+                                                     const Pose& T_c0_c0rect);
+
+// Applies a calibration file (--calibration, any format ReadCameraCalibration reads) to a
+// sequence of raw images: sets seq->rig, the remap tables (MakeRectification), raw_size and
+// raw_size_source (the file). Returns T_c0_c0rect (ground truth of the raw left camera T_w_c0
+// becomes T_w_c0 * T_c0_c0rect). Throws dala::Error when the images are stereo and the
+// calibration describes one camera.
+Pose ApplyCalibration(const CameraCalibration& calibration, bool stereo, ImageSequence* seq);
 
 }  // namespace dala
 

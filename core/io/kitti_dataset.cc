@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "core/error.h"
-#include "core/io/calibration_yaml.h"
+#include "core/io/camera_calibration.h"
 #include "core/io/text_lines.h"
 #include "core/io/trajectory_io.h"
 
@@ -140,19 +140,10 @@ ImageSequence ReadKittiSequence(const std::string& folder, const DatasetOptions&
   // of the run.
   const std::string& first_file = seq.left_files[range.begin];
   const cv::Mat first = LoadGrayImage(first_file, cv::Size(), "");
+  Pose T_c0_c0rect = Pose::Identity();
   if (!options.calibration_yaml.empty()) {
-    seq.rig = ReadCalibrationYaml(options.calibration_yaml);
-    seq.raw_size = cv::Size(seq.rig.left.width, seq.rig.left.height);
-    seq.raw_size_source = "the calibration " + options.calibration_yaml;
+    T_c0_c0rect = ApplyCalibration(ReadCameraCalibration(options.calibration_yaml), stereo, &seq);
     LoadGrayImage(first_file, seq.raw_size, seq.raw_size_source);
-    if (stereo && !seq.rig.is_stereo()) {
-      throw Error() << options.calibration_yaml << ": no 'baseline' for the stereo sequence "
-                    << folder << ": add it (metres) or read the sequence as monocular";
-    }
-    if (!stereo) seq.rig.baseline = 0;
-    if (seq.rig.left.HasDistortion()) {
-      seq.rig.left = MakeUndistortionMaps(seq.rig.left, &seq.left_map1, &seq.left_map2);
-    }
   } else {
     seq.rig = RigFromCalib(folder + "/calib.txt", stereo);
     seq.raw_size = first.size();
@@ -169,7 +160,7 @@ ImageSequence ReadKittiSequence(const std::string& folder, const DatasetOptions&
       throw Error() << *poses_path << " has " << gt.size() << " poses for " << n
                     << " images: the ground truth needs one pose per image";
     }
-    for (size_t i = 0; i < n; ++i) seq.T_w_c0_gt.push_back(gt.poses[i].T_w_c);
+    for (size_t i = 0; i < n; ++i) seq.T_w_c0_gt.push_back(gt.poses[i].T_w_c * T_c0_c0rect);
   }
   // Optional odometry (TUM: t x y z qx qy qz qw of the left camera), one pose at each image time.
   const std::string odometry_path = folder + "/odometry.txt";

@@ -24,6 +24,15 @@ ImageSequence ReadSyntheticSequence(const std::string& folder, const DatasetOpti
     throw Error() << marker << ": version " << version << " is not supported (this dala reads "
                   << "version " << kSyntheticFormatVersion << "); regenerate with `dala synth`";
   }
+  // Rendered through a lens: the calibration with the lens (calib.txt has the raw K only).
+  std::string lens = "pinhole";
+  root.Read("lens", &lens);
+  if (lens != "pinhole" && options.calibration_yaml.empty()) {
+    DatasetOptions with_lens = options;
+    with_lens.calibration_yaml = folder + "/calibration/kalibr.yaml";
+    RequireFile(with_lens.calibration_yaml, "the calibration of the lens the images have");
+    return ReadKittiSequence(folder, with_lens, DatasetFormat::kSynthetic);
+  }
   return ReadKittiSequence(folder, options, DatasetFormat::kSynthetic);
 }
 

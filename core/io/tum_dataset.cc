@@ -3,7 +3,7 @@
 #include <filesystem>
 
 #include "core/error.h"
-#include "core/io/calibration_yaml.h"
+#include "core/io/camera_calibration.h"
 #include "core/io/text_lines.h"
 #include "core/io/trajectory_io.h"
 
@@ -63,25 +63,22 @@ ImageSequence ReadTumSequence(const std::string& folder, const DatasetOptions& o
   }
   CheckMissingImages(missing, range, options, folder);
 
-  PinholeCamera raw;
   if (!options.calibration_yaml.empty()) {
-    const StereoRig rig = ReadCalibrationYaml(options.calibration_yaml);
-    raw = rig.left;
-    seq.raw_size_source = "the calibration " + options.calibration_yaml;
+    ApplyCalibration(ReadCameraCalibration(options.calibration_yaml), /*stereo=*/false, &seq);
   } else {
     const std::string name = fs::weakly_canonical(fs::path(folder)).filename().string();
     const auto cam = TumIntrinsicsForSequence(name);
     if (!cam) {
       throw Error() << folder << ": cannot tell the TUM camera from the folder name '" << name
                     << "' (expected freiburg1/2/3 or fr1/2/3 in it); give the intrinsics in a "
-                    << "calibration YAML (--calibration)";
+                    << "calibration file (--calibration)";
     }
-    raw = *cam;
+    const PinholeCamera& raw = *cam;
     seq.raw_size_source = "the TUM " + name + " camera (640x480)";
+    seq.raw_size = cv::Size(raw.width, raw.height);
+    seq.rig.left =
+        raw.HasDistortion() ? MakeUndistortionMaps(raw, &seq.left_map1, &seq.left_map2) : raw;
   }
-  seq.raw_size = cv::Size(raw.width, raw.height);
-  seq.rig.left =
-      raw.HasDistortion() ? MakeUndistortionMaps(raw, &seq.left_map1, &seq.left_map2) : raw;
   LoadGrayImage(seq.left_files[range.begin], seq.raw_size, seq.raw_size_source);
 
   const std::string gt_path = folder + "/groundtruth.txt";

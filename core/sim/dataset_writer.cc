@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/io/atomic_file.h"
+#include "core/io/camera_calibration.h"
 #include "core/io/trajectory_io.h"
 
 namespace dala::sim {
@@ -42,6 +43,38 @@ void WriteCalib(const std::string& path, const SyntheticSequence& seq) {
          << " 0 0 0 1 0\n";
     }
   });
+}
+
+// The raw cameras (with the lens) in every calibration format dala reads.
+void WriteCalibrationFiles(const std::string& dir, const SyntheticSequence& seq) {
+  const SimOptions& o = seq.options();
+  const PinholeCamera& c = seq.camera();
+  CameraCalibration calibration;
+  RawCamera& cam = calibration.cam0;
+  cam.width = c.width;
+  cam.height = c.height;
+  cam.fx = c.fx;
+  cam.fy = c.fy;
+  cam.cx = c.cx;
+  cam.cy = c.cy;
+  cam.model = o.lens == "fisheye" ? LensModel::kFisheye : LensModel::kRadtan;
+  const std::vector<double> k = o.LensCoefficients();
+  for (int i = 0; i < 5; ++i) cam.distortion[i] = k[i];
+  CameraCalibration pair = calibration;
+  if (o.stereo) {
+    pair.cam1 = cam;
+    pair.T_c1_c0 = seq.T_c0_c1().inverse();
+  }
+  CreateDirectories(dir);
+  WriteCameraCalibration(dir + "/opencv.yml", pair, CalibrationFormat::kOpenCv);
+  WriteCameraCalibration(dir + "/kalibr.yaml", pair, CalibrationFormat::kKalibr);
+  // One camera: the left one.
+  WriteCameraCalibration(dir + "/ros_camera_info.yaml", calibration, CalibrationFormat::kRos);
+  // dala's own: a rectified pair or one camera with radtan distortion.
+  if (o.lens == "pinhole" || (o.lens == "radtan" && !o.stereo)) {
+    if (o.stereo) calibration.rectified_baseline = o.baseline;
+    WriteCameraCalibration(dir + "/dala.yaml", calibration, CalibrationFormat::kDala);
+  }
 }
 
 // Points with duplicates (corners shared by adjacent patches, to 1 mm) removed, first kept.
@@ -90,6 +123,10 @@ void WriteMarker(const std::string& path, const SyntheticSequence& seq) {
   // The right image's principal point error (not in calib.txt): a rig to test calibration on.
   fs << "right_cx_error_px" << (o.stereo ? o.right_cx_error_px : 0.0);
   fs << "stereo" << static_cast<int>(o.stereo);
+  // The lens (pinhole: none); with one, calib.txt holds the raw K and calibration/kalibr.yaml
+  // (read by default) the lens.
+  fs << "lens" << o.lens;
+  fs << "lens_coefficients" << o.LensCoefficients();
   fs << "fps" << o.fps;
   fs << "frames" << static_cast<int>(seq.size());
   fs << "noise_sigma" << o.noise_sigma;
@@ -111,6 +148,7 @@ void WriteSyntheticDataset(const SimOptions& options, const std::string& dir,
   CreateDirectories(dir + "/image_0");
   if (options.stereo) CreateDirectories(dir + "/image_1");
   WriteCalib(dir + "/calib.txt", seq);
+  WriteCalibrationFiles(dir + "/calibration", seq);
   WriteFileAtomically(dir + "/times.txt", [&](std::ostream& os) {
     os << std::setprecision(9) << std::fixed;
     for (size_t i = 0; i < seq.size(); ++i) os << SecondsFromNs(seq.t_ns(i)) << "\n";

@@ -7,6 +7,9 @@
 //   calib.txt          "P0: ..." .. "P3: ..." 3x4 row-major; P1 = P3 = K [I | (-b, 0, 0)]
 //   times.txt          frame times in seconds, one per line
 //   poses.txt          KITTI rows: row-major 3x4 T_w_c0 per frame
+//   calibration/       the raw cameras (with the lens, SimOptions::lens) in each calibration
+//                      format dala reads: opencv.yml, kalibr.yaml, ros_camera_info.yaml (left
+//                      camera), dala.yaml (when it can hold them: no fisheye, no raw pair)
 //   synth.yaml         cv::FileStorage marker: format "dala-synthetic", version 1, options
 //   odometry.txt       (optional) TUM: integrated noisy odometry (NoisyOdometry)
 //   points.ply         (optional) true 3D scene points in the world frame (ASCII PLY)

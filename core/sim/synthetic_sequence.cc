@@ -6,6 +6,9 @@
 #include <cmath>
 #include <sstream>
 
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "core/error.h"
 #include "core/sim/random.h"
 
@@ -49,6 +52,16 @@ bool SimOptions::IsValid(std::string* why) const {
   } else if (!(odometry_sigma_rot >= 0 && odometry_sigma_trans >= 0 &&
                odometry_sigma_trans_fraction >= 0)) {
     os << "odometry sigmas must be >= 0";
+  } else if (lens != "pinhole" && lens != "radtan" && lens != "fisheye") {
+    os << "lens must be pinhole, radtan or fisheye, got '" << lens << "'";
+  } else if (lens == "radtan" && !lens_coefficients.empty() &&
+             lens_coefficients.size() != 4 && lens_coefficients.size() != 5) {
+    os << "a radtan lens has 4 or 5 coefficients (k1 k2 p1 p2 [k3]), got "
+       << lens_coefficients.size();
+  } else if (lens == "fisheye" && !lens_coefficients.empty() && lens_coefficients.size() != 4) {
+    os << "a fisheye lens has 4 coefficients (k1 k2 k3 k4), got " << lens_coefficients.size();
+  } else if (lens == "pinhole" && !lens_coefficients.empty()) {
+    os << "lens coefficients need a lens (radtan or fisheye)";
   } else if (texture_size < 64 || texture_size > 4096 || (texture_size & (texture_size - 1))) {
     os << "texture_size must be a power of two in 64..4096, got " << texture_size;
   } else {
@@ -56,6 +69,14 @@ bool SimOptions::IsValid(std::string* why) const {
   }
   if (why != nullptr) *why = os.str();
   return false;
+}
+
+std::vector<double> SimOptions::LensCoefficients() const {
+  std::vector<double> k = lens_coefficients;
+  if (k.empty() && lens == "radtan") k = {-0.28, 0.07, 2e-4, 2e-5, 0};
+  if (k.empty() && lens == "fisheye") k = {0.02, -0.01, 0.005, -0.001};
+  k.resize(5, 0.0);
+  return k;
 }
 
 std::vector<std::string> PresetNames() {
@@ -77,6 +98,8 @@ SyntheticSequence::SyntheticSequence(const SimOptions& options) : options_(optio
   camera_.fy = options_.fy;
   camera_.cx = options_.cx_or_centre();
   camera_.cy = options_.cy_or_centre();
+  canvas_ = camera_;
+  BuildLens();
   world_ = BuildWorld(options_.preset, options_.seed, options_.texture_size);
   for (int i = 0; i < frames_; ++i) ground_truth_.Add(t_ns(i), T_w_c0(i));
 }
@@ -101,6 +124,51 @@ Pose SyntheticSequence::T_w_c0(size_t i) const {
   return world_.path->T_w_c(static_cast<double>(i) / options_.fps);
 }
 
+void SyntheticSequence::BuildLens() {
+  if (options_.lens == "pinhole") return;
+  const std::vector<double> k = options_.LensCoefficients();
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << camera_.fx, 0, camera_.cx, 0, camera_.fy,
+                     camera_.cy, 0, 0, 1);
+  // Every raw pixel's undistorted normalised coordinates (x, y) = (X/Z, Y/Z).
+  std::vector<cv::Point2f> raw;
+  raw.reserve(static_cast<size_t>(camera_.width) * camera_.height);
+  for (int v = 0; v < camera_.height; ++v) {
+    for (int u = 0; u < camera_.width; ++u) raw.emplace_back(u, v);
+  }
+  std::vector<cv::Point2f> normalised;
+  if (options_.lens == "fisheye") {
+    cv::fisheye::undistortPoints(raw, normalised, K, cv::Mat(cv::Vec4d(k[0], k[1], k[2], k[3])));
+  } else {
+    cv::undistortPoints(raw, normalised, K,
+                        cv::Mat(std::vector<double>(k.begin(), k.end())).reshape(1, 1),
+                        cv::noArray(), cv::noArray(),
+                        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50,
+                                         1e-10));
+  }
+  // The canvas: same focal lengths, centred, wide enough for every ray plus a margin.
+  double max_x = 0, max_y = 0;
+  for (const cv::Point2f& p : normalised) {
+    max_x = std::max(max_x, std::abs(static_cast<double>(p.x)));
+    max_y = std::max(max_y, std::abs(static_cast<double>(p.y)));
+  }
+  const int half_w = static_cast<int>(std::ceil(max_x * camera_.fx)) + 4;
+  const int half_h = static_cast<int>(std::ceil(max_y * camera_.fy)) + 4;
+  CHECK_LT(half_w, 8192) << "the lens's field of view is too wide to render through a pinhole";
+  CHECK_LT(half_h, 8192) << "the lens's field of view is too wide to render through a pinhole";
+  canvas_.width = 2 * half_w + 1;
+  canvas_.height = 2 * half_h + 1;
+  canvas_.cx = half_w;
+  canvas_.cy = half_h;
+  lens_map_x_.create(camera_.height, camera_.width, CV_32FC1);
+  lens_map_y_.create(camera_.height, camera_.width, CV_32FC1);
+  for (int v = 0, i = 0; v < camera_.height; ++v) {
+    for (int u = 0; u < camera_.width; ++u, ++i) {
+      lens_map_x_.at<float>(v, u) = static_cast<float>(canvas_.fx * normalised[i].x + canvas_.cx);
+      lens_map_y_.at<float>(v, u) = static_cast<float>(canvas_.fy * normalised[i].y + canvas_.cy);
+    }
+  }
+}
+
 cv::Mat SyntheticSequence::RenderView(const Pose& T_w_c, cv::Mat* depth) const {
   cv::Mat radiance, image;
   RenderScene(world_.scene, camera_, T_w_c, &radiance, depth);
@@ -111,7 +179,7 @@ cv::Mat SyntheticSequence::RenderView(const Pose& T_w_c, cv::Mat* depth) const {
 cv::Mat SyntheticSequence::RenderCamera(size_t i, int cam) const {
   const double t = static_cast<double>(i) / options_.fps;
   const Pose T_c0_c = cam == 0 ? Pose::Identity() : T_c0_c1();
-  PinholeCamera camera = camera_;
+  PinholeCamera camera = canvas_;  // camera_ without a lens.
   if (cam == 1) camera.cx += options_.right_cx_error_px;
   cv::Mat radiance;
   if (options_.motion_blur) {
@@ -126,7 +194,7 @@ cv::Mat SyntheticSequence::RenderCamera(size_t i, int cam) const {
                             (LogSO3(d.linear()).norm() + d.translation().norm() / 4.0);
       n = std::clamp(static_cast<int>(std::ceil(pixels / 3.0)) + 1, 2, 12);
     }
-    cv::Mat sum = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1), sample;
+    cv::Mat sum = cv::Mat::zeros(camera.height, camera.width, CV_32FC1), sample;
     for (int k = 0; k < n; ++k) {
       const double tk = t + exposure * (static_cast<double>(k) / (n - 1) - 0.5);
       RenderScene(world_.scene, camera, world_.path->T_w_c(tk) * T_c0_c, &sample);
@@ -135,6 +203,12 @@ cv::Mat SyntheticSequence::RenderCamera(size_t i, int cam) const {
     radiance = sum * (1.0 / n);
   } else {
     RenderScene(world_.scene, camera, world_.path->T_w_c(t) * T_c0_c, &radiance);
+  }
+  if (!lens_map_x_.empty()) {
+    cv::Mat through_lens;
+    cv::remap(radiance, through_lens, lens_map_x_, lens_map_y_, cv::INTER_LINEAR,
+              cv::BORDER_REPLICATE);
+    radiance = through_lens;
   }
   if (options_.brightness_change > 0) {
     SimRng phase_rng(MixSeed(options_.seed, 77));

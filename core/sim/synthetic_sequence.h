@@ -72,6 +72,15 @@ struct SimOptions {
   double odometry_sigma_rot = 0.002;
   double odometry_sigma_trans = 0.005;
   double odometry_sigma_trans_fraction = 0.02;
+  // Lens of the rendered images: "pinhole" (none), "radtan" (OpenCV plumb bob, k1 k2 p1 p2 k3)
+  // or "fisheye" (equidistant / Kannala-Brandt k1..k4, cv::fisheye), both cameras alike. fx fy
+  // cx cy above are then the raw camera's; each image is rendered through a pinhole canvas wide
+  // enough for the lens's field of view and warped through the lens (before noise), so the
+  // frames are what a real distorting lens gives. Ground truth is of the raw left camera.
+  std::string lens = "pinhole";
+  // The lens's coefficients (radtan: 4 or 5, fisheye: 4); empty: typical values (radtan
+  // -0.28 0.07 2e-4 2e-5 0, EuRoC's cam0; fisheye 0.02 -0.01 0.005 -0.001).
+  std::vector<double> lens_coefficients;
   // Side of the procedural textures (power of two); smaller builds faster, looks coarser.
   int texture_size = 1024;
 
@@ -79,6 +88,9 @@ struct SimOptions {
   // Effective principal point.
   double cx_or_centre() const { return cx >= 0 ? cx : (width - 1) / 2.0; }
   double cy_or_centre() const { return cy >= 0 ? cy : (height - 1) / 2.0; }
+  // The lens coefficients in effect (the defaults when lens_coefficients is empty; 5 numbers,
+  // fisheye's fifth 0); all zero for "pinhole".
+  std::vector<double> LensCoefficients() const;
 };
 
 // Names of the presets, in a fixed order.
@@ -92,7 +104,9 @@ class SyntheticSequence {
   const SimOptions& options() const { return options_; }
   size_t size() const { return static_cast<size_t>(frames_); }
   const PinholeCamera& camera() const { return camera_; }
-  // The rectified rig of the sequence (baseline 0 when rendered mono).
+  // The rectified rig of the sequence (baseline 0 when rendered mono). With a lens (options
+  // .lens), the raw camera's intrinsics: the images need undistorting first (the calibration
+  // files `dala synth` writes describe the lens).
   StereoRig rig() const {
     StereoRig rig;
     rig.left = camera_;
@@ -113,8 +127,8 @@ class SyntheticSequence {
   const Trajectory& ground_truth() const { return ground_truth_; }
   double PathLength() const { return ground_truth_.PathLength(); }
 
-  // Renders a clean view (no noise, blur or brightness change) from any camera pose T_w_c with
-  // the sequence's intrinsics; CV_8UC1. depth (optional): CV_32FC1 z in the camera frame
+  // Renders a clean view (no noise, blur, brightness change or lens) from any camera pose T_w_c
+  // with the sequence's intrinsics; CV_8UC1. depth (optional): CV_32FC1 z in the camera frame
   // (metres) of the surface seen at each pixel, 0 where the pixel sees the sky.
   cv::Mat RenderView(const Pose& T_w_c, cv::Mat* depth = nullptr) const;
 
@@ -123,10 +137,15 @@ class SyntheticSequence {
 
  private:
   cv::Mat RenderCamera(size_t i, int cam) const;
+  // The lens: the canvas pinhole camera the scene is rendered with, and the cv::remap tables
+  // from the canvas to the raw image (empty without a lens).
+  void BuildLens();
 
   SimOptions options_;
   int frames_ = 0;
   PinholeCamera camera_;
+  PinholeCamera canvas_;  // = camera_ without a lens.
+  cv::Mat lens_map_x_, lens_map_y_;
   World world_;
   Trajectory ground_truth_;
 };
