@@ -396,15 +396,7 @@ void CheckFrameSuitsRig(const Frame& frame, const StereoRig& rig) {
   if (rig.is_stereo() && !frame.right.empty()) check(frame.right, "right");
 }
 
-FrameMeasurement Frontend::Process(const Frame& frame) {
-  CheckFrameSuitsRig(frame, rig_);
-  const bool stereo = rig_.is_stereo() && !frame.right.empty();
-  const auto t_start = Clock::now();
-  FrameMeasurement out;
-  out.frame = frame.id;
-  out.t_ns = frame.t_ns;
-  out.stereo = stereo;
-
+void Frontend::FollowEstimator() {
   // After a relocalisation the stereo dead reckoning restarts from the estimator's pose (see
   // relocalised_prev_); the extrapolation across the gap is discarded. (One camera's dead
   // reckoning has its own unit and is only compared with itself: it goes on.)
@@ -422,76 +414,72 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
       !local_map_search_.LostAt(prev_->id)) {
     tracked_keyframe_ = keyframe_;
   }
+}
 
-  // 1. Interest points, both images at once.
-  TrackedFrame cur;
-  cur.id = frame.id;
+DetectedImage Frontend::Detect(const Frame& frame, bool stereo, TrackedFrame* cur) {
   DetectedImage right;
   if (stereo && options_.parallel_detection) {
     detection_worker_.Start([&] { right = DetectHarris(frame.right, options_.harris); });
-    cur.detection = DetectHarris(frame.left, options_.harris);
+    cur->detection = DetectHarris(frame.left, options_.harris);
     detection_worker_.Wait();
   } else {
     // One camera: the worker helps with the left image's pyramid levels and descriptors.
     WorkerThread* helper =
         !stereo && options_.parallel_detection ? &detection_worker_ : nullptr;
-    cur.detection = DetectHarris(frame.left, options_.harris, helper);
+    cur->detection = DetectHarris(frame.left, options_.harris, helper);
     if (stereo) right = DetectHarris(frame.right, options_.harris);
   }
-  const size_t n = cur.detection.points.size();
-  cur.landmark.assign(n, LandmarkId());
-  cur.track_length.assign(n, 1);
-  out.timings.detect_ms = MsSince(t_start);
+  const size_t n = cur->detection.points.size();
+  cur->landmark.assign(n, LandmarkId());
+  cur->track_length.assign(n, 1);
+  return right;
+}
 
-  // 2. Stereo, and on the worker the temporal matches of the first tracking attempt (predicted
-  // by the constant velocity): both only read the detections, so they run side by side, with
-  // the same result as one after the other. stereo_ms is then the time of both.
-  auto t0 = Clock::now();
-  cur.stereo.assign(n, std::nullopt);
+std::optional<std::vector<Match>> Frontend::MatchStereoAndPredict(const Frame& frame, bool stereo,
+                                                                  const DetectedImage& right,
+                                                                  TrackedFrame* cur) {
+  cur->stereo.assign(cur->detection.points.size(), std::nullopt);
   std::optional<std::vector<Match>> predicted_matches;
   const bool overlap = stereo && prev_ && options_.parallel_detection;
   if (overlap) {
     detection_worker_.Start(
-        [&] { predicted_matches = MatchTemporal(*prev_, cur.detection, &velocity_T_prev_cur_); });
+        [&] { predicted_matches = MatchTemporal(*prev_, cur->detection, &velocity_T_prev_cur_); });
   }
   if (stereo) {
-    cur.stereo = MatchStereo(rig_, cur.detection, right, frame.left, frame.right, options_.stereo);
+    cur->stereo = MatchStereo(rig_, cur->detection, right, frame.left, frame.right, options_.stereo);
   }
   if (overlap) detection_worker_.Wait();
-  out.timings.stereo_ms = MsSince(t0);
+  return predicted_matches;
+}
 
-  // 3. Tracking and motion.
-  t0 = Clock::now();
-  std::optional<MotionEstimate> motion;
-  if (prev_) {
-    motion = TrackFromPrevious(&cur, std::move(predicted_matches));
-    if (motion) {
-      // Monocular: the essential matrix gives the direction, not the length: keep the previous
-      // step's length (read before the velocity is replaced; the first step has length 1).
-      // A rotation-only motion (EstimateRotation) has no translation: the step length is kept
-      // for the next frame that has one.
-      const double step = velocity_T_prev_cur_.translation().norm();
-      if (step > 0) mono_step_length_ = step;
-      velocity_T_prev_cur_ = motion->T_prev_cur;
-      if (!motion->scale_known) velocity_T_prev_cur_.translation() *= mono_step_length_;
-    }
-    // Lost: assume the last velocity for this frame (the gap is flagged by the status).
-    cur.T_w_c = Orthonormalized(prev_->T_w_c * velocity_T_prev_cur_);
-    path_length_m_ += (cur.T_w_c.translation() - prev_->T_w_c.translation()).norm();
-    out.status = motion ? TrackingStatus::kTracking : TrackingStatus::kLost;
-  } else {
-    out.status = TrackingStatus::kInitializing;
+std::optional<MotionEstimate> Frontend::TrackAndDeadReckon(
+    TrackedFrame* cur, std::optional<std::vector<Match>> predicted_matches, TrackingStatus* status) {
+  if (!prev_) {
+    *status = TrackingStatus::kInitializing;
+    return std::nullopt;
   }
-  out.timings.motion_ms = MsSince(t0);
-  t0 = Clock::now();
-  if (motion && keyframe_ && keyframe_->id != prev_->id) {
-    ReacquireFromKeyframe(&cur);
+  std::optional<MotionEstimate> motion = TrackFromPrevious(cur, std::move(predicted_matches));
+  if (motion) {
+    // Monocular: the essential matrix gives the direction, not the length: keep the previous
+    // step's length (read before the velocity is replaced; the first step has length 1).
+    // A rotation-only motion (EstimateRotation) has no translation: the step length is kept
+    // for the next frame that has one.
+    const double step = velocity_T_prev_cur_.translation().norm();
+    if (step > 0) mono_step_length_ = step;
+    velocity_T_prev_cur_ = motion->T_prev_cur;
+    if (!motion->scale_known) velocity_T_prev_cur_.translation() *= mono_step_length_;
   }
-  // The guided local-map search: one camera, or stereo while the frame-to-frame tracks break
-  // (local_map.stereo_when_tracked_below). The relocalisation
-  // after a lost frame: both.
+  // Lost: assume the last velocity for this frame (the gap is flagged by the status).
+  cur->T_w_c = Orthonormalized(prev_->T_w_c * velocity_T_prev_cur_);
+  path_length_m_ += (cur->T_w_c.translation() - prev_->T_w_c.translation()).norm();
+  *status = motion ? TrackingStatus::kTracking : TrackingStatus::kLost;
+  return motion;
+}
+
+bool Frontend::GuidedSearchOn(FrameId frame, bool stereo, bool tracked, const TrackedFrame& cur) {
   const double auto_below = options_.local_map.stereo_when_tracked_below;
-  if (stereo && motion && auto_below > 0 && n > 0) {
+  const size_t n = cur.landmark.size();
+  if (stereo && tracked && auto_below > 0 && n > 0) {
     const double continued = static_cast<double>(std::count_if(
         cur.landmark.begin(), cur.landmark.end(), [](const LandmarkId& id) { return id.valid(); }));
     const double fraction = continued / n;
@@ -501,91 +489,78 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
     stereo_search_on_ = was_on ? mean_tracked_fraction_ <= auto_below + 0.1
                                : mean_tracked_fraction_ < auto_below;
     if (was_on != stereo_search_on_) {
-      VLOG(1) << "frame " << frame.id << ": guided local-map search "
+      VLOG(1) << "frame " << frame << ": guided local-map search "
               << (stereo_search_on_ ? "on" : "off") << " (mean tracked fraction "
               << mean_tracked_fraction_ << ")";
     }
   }
-  const bool guided = !stereo || stereo_search_on_;
+  return !stereo || stereo_search_on_;
+}
+
+bool Frontend::FindLandmarks(const Frame& frame, const std::optional<MotionEstimate>& motion,
+                             bool guided, bool lost_before, TrackedFrame* cur) {
+  if (motion && keyframe_ && keyframe_->id != prev_->id) ReacquireFromKeyframe(cur);
   if (prev_ && guided) {
     std::optional<Pose> T_prev_cur;
     if (motion) T_prev_cur = motion->T_prev_cur;
     const int found = local_map_search_.Search(prev_->id, T_prev_cur,
-                                               motion && motion->scale_known, cur.detection,
-                                               &cur.landmark, &cur.track_length);
+                                               motion && motion->scale_known, cur->detection,
+                                               &cur->landmark, &cur->track_length);
     VLOG(2) << "frame " << frame.id << ": " << found << " points found in the local map";
   }
-  // Lost before, or not yet placed in a saved map (UseMap): from the first frame on.
-  const bool lost_before = (prev_ && local_map_search_.LostAt(prev_->id)) || awaiting_map_;
-  if (lost_before && tracked_keyframe_) RelocalizeFromKeyframe(&cur);
-  for (size_t i = 0; i < n; ++i) {
-    if (!cur.landmark[i].valid()) cur.landmark[i] = LandmarkId(next_landmark_++);
+  if (lost_before && tracked_keyframe_) RelocalizeFromKeyframe(cur);
+  for (LandmarkId& id : cur->landmark) {
+    if (!id.valid()) id = LandmarkId(next_landmark_++);
   }
   // The last tracked keyframe may be out of view after a long loss: then any mapped place will
   // do. Not while the window's landmarks are found around the last tracked pose: a short loss
   // recovers there (the rendered `fast` run finds 12-30 after each of its lost frames and
   // recovers; relabelling some of its points from the database too made it lose 14 more).
-  bool relocalised = false;
-  if (lost_before) {
-    const int mapped = static_cast<int>(std::count_if(
-        cur.landmark.begin(), cur.landmark.end(),
-        [&](const LandmarkId& id) { return local_map_search_.IsMapped(id); }));
-    if (mapped < options_.loop.relocalise_below_mapped) {
-      relocalised = RelocalizeFromDatabase(frame, &cur);
-    }
-  }
-  out.timings.track_ms = MsSince(t0);
-  T_w_cur_ = cur.T_w_c;
-  out.motion = motion;
+  if (!lost_before) return false;
+  const int mapped = static_cast<int>(std::count_if(
+      cur->landmark.begin(), cur->landmark.end(),
+      [&](const LandmarkId& id) { return local_map_search_.IsMapped(id); }));
+  return mapped < options_.loop.relocalise_below_mapped && RelocalizeFromDatabase(frame, cur);
+}
 
-  // 4. Keyframe decision against the last keyframe.
+bool Frontend::DecideKeyframe(const TrackedFrame& cur, bool stereo, bool guided,
+                              bool relocalised, FrameMeasurement* out) {
   ++frames_since_keyframe_;
   // A relocalised frame starts again where the map is: a keyframe.
-  if (!keyframe_ || out.status != TrackingStatus::kTracking || relocalised) {
-    out.is_keyframe = true;
-  } else {
-    // The keyframe's landmarks the evidence counts: with a local map (one camera), those the
-    // estimator maps, since most detections never become landmarks and would make every frame
-    // a keyframe (KITTI: ~30 % of the detections are tracked to the next frame); else all.
-    const bool mapped_only = local_map_search_.has_map() && guided;
-    std::unordered_map<LandmarkId, Eigen::Vector2d> kf_uv;
-    for (size_t i = 0; i < keyframe_->landmark.size(); ++i) {
-      if (mapped_only && !local_map_search_.IsMapped(keyframe_->landmark[i])) continue;
-      kf_uv[keyframe_->landmark[i]] = keyframe_->detection.points[i].uv;
-    }
-    std::vector<double> parallax;
-    for (size_t i = 0; i < n; ++i) {
-      const auto it = kf_uv.find(cur.landmark[i]);
-      if (it != kf_uv.end()) parallax.push_back((cur.detection.points[i].uv - it->second).norm());
-    }
-    KeyframeEvidence evidence;
-    evidence.frames_since_keyframe = frames_since_keyframe_;
-    evidence.tracked_fraction =
-        kf_uv.empty() ? 0.0 : static_cast<double>(parallax.size()) / kf_uv.size();
-    if (!parallax.empty()) {
-      std::nth_element(parallax.begin(), parallax.begin() + parallax.size() / 2, parallax.end());
-      evidence.median_parallax_px = parallax[parallax.size() / 2];
-    }
-    evidence.T_kf_cur = keyframe_->T_w_c.inverse() * cur.T_w_c;
-    // One camera: the dead-reckoned translation has no unit, so no criterion on distance.
-    if (!stereo) evidence.T_kf_cur.translation().setZero();
-    evidence.stereo_baseline_m = stereo ? rig_.baseline : 0.0;
-    out.tracked_fraction = evidence.tracked_fraction;
-    out.is_keyframe = keyframe_policy_.IsKeyframe(evidence);
+  if (!keyframe_ || out->status != TrackingStatus::kTracking || relocalised) return true;
+  // The keyframe's landmarks the evidence counts: with a local map (one camera), those the
+  // estimator maps, since most detections never become landmarks and would make every frame
+  // a keyframe (KITTI: ~30 % of the detections are tracked to the next frame); else all.
+  const bool mapped_only = local_map_search_.has_map() && guided;
+  std::unordered_map<LandmarkId, Eigen::Vector2d> kf_uv;
+  for (size_t i = 0; i < keyframe_->landmark.size(); ++i) {
+    if (mapped_only && !local_map_search_.IsMapped(keyframe_->landmark[i])) continue;
+    kf_uv[keyframe_->landmark[i]] = keyframe_->detection.points[i].uv;
   }
-
-  // 5. Loop detection at keyframes (relabels the recognised points before they are output).
-  // Not after a loss: the dead-reckoned pose that gates a loop is an extrapolation then, and a
-  // recognised place has already relabelled the points (RelocalizeFromDatabase).
-  if (out.is_keyframe && options_.loop.enable && !lost_before &&
-      (stereo || (prev_ && local_map_search_.has_map()))) {
-    t0 = Clock::now();
-    out.loop = DetectLoop(frame, motion, &cur, &out.place_held_by);
-    out.timings.loop_ms = MsSince(t0);
+  std::vector<double> parallax;
+  for (size_t i = 0; i < cur.landmark.size(); ++i) {
+    const auto it = kf_uv.find(cur.landmark[i]);
+    if (it != kf_uv.end()) parallax.push_back((cur.detection.points[i].uv - it->second).norm());
   }
+  KeyframeEvidence evidence;
+  evidence.frames_since_keyframe = frames_since_keyframe_;
+  evidence.tracked_fraction =
+      kf_uv.empty() ? 0.0 : static_cast<double>(parallax.size()) / kf_uv.size();
+  if (!parallax.empty()) {
+    std::nth_element(parallax.begin(), parallax.begin() + parallax.size() / 2, parallax.end());
+    evidence.median_parallax_px = parallax[parallax.size() / 2];
+  }
+  evidence.T_kf_cur = keyframe_->T_w_c.inverse() * cur.T_w_c;
+  // One camera: the dead-reckoned translation has no unit, so no criterion on distance.
+  if (!stereo) evidence.T_kf_cur.translation().setZero();
+  evidence.stereo_baseline_m = stereo ? rig_.baseline : 0.0;
+  out->tracked_fraction = evidence.tracked_fraction;
+  return keyframe_policy_.IsKeyframe(evidence);
+}
 
-  // 6. The measurement.
-  out.observations.reserve(n);
+void Frontend::FillObservations(const TrackedFrame& cur, FrameMeasurement* out) const {
+  const size_t n = cur.landmark.size();
+  out->observations.reserve(n);
   for (size_t i = 0; i < n; ++i) {
     FeatureObservation o;
     o.landmark = cur.landmark[i];
@@ -597,11 +572,69 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
       o.p_c0 = cur.stereo[i]->p_c0;
       o.cov_p_c0 = cur.stereo[i]->cov_p_c0;
     }
-    out.observations.push_back(o);
+    out->observations.push_back(o);
   }
-  // Appearances are kept only where the System hands over local maps (System::Track) and the
-  // search may run.
-  if (!stereo || auto_below > 0) {
+}
+
+FrameMeasurement Frontend::Process(const Frame& frame) {
+  CheckFrameSuitsRig(frame, rig_);
+  const bool stereo = rig_.is_stereo() && !frame.right.empty();
+  const auto t_start = Clock::now();
+  FrameMeasurement out;
+  out.frame = frame.id;
+  out.t_ns = frame.t_ns;
+  out.stereo = stereo;
+  FollowEstimator();
+
+  // 1. Interest points, both images at once.
+  TrackedFrame cur;
+  cur.id = frame.id;
+  const DetectedImage right = Detect(frame, stereo, &cur);
+  out.timings.detect_ms = MsSince(t_start);
+
+  // 2. Stereo, and on the worker the temporal matches of the first tracking attempt (predicted
+  // by the constant velocity): both only read the detections, so they run side by side, with
+  // the same result as one after the other. stereo_ms is then the time of both.
+  auto t0 = Clock::now();
+  std::optional<std::vector<Match>> predicted_matches =
+      MatchStereoAndPredict(frame, stereo, right, &cur);
+  out.timings.stereo_ms = MsSince(t0);
+
+  // 3. Tracking and motion.
+  t0 = Clock::now();
+  const std::optional<MotionEstimate> motion =
+      TrackAndDeadReckon(&cur, std::move(predicted_matches), &out.status);
+  out.timings.motion_ms = MsSince(t0);
+
+  // 4. The landmark of each point: the keyframe's lost tracks, the guided local-map search (one
+  // camera, or stereo while the frame-to-frame tracks break), after a lost frame the
+  // relocalisation, new ids for the rest.
+  t0 = Clock::now();
+  const bool guided = GuidedSearchOn(frame.id, stereo, motion.has_value(), cur);
+  // Lost before, or not yet placed in a saved map (UseMap): from the first frame on.
+  const bool lost_before = (prev_ && local_map_search_.LostAt(prev_->id)) || awaiting_map_;
+  const bool relocalised = FindLandmarks(frame, motion, guided, lost_before, &cur);
+  out.timings.track_ms = MsSince(t0);
+  T_w_cur_ = cur.T_w_c;
+  out.motion = motion;
+
+  // 5. Keyframe decision against the last keyframe.
+  out.is_keyframe = DecideKeyframe(cur, stereo, guided, relocalised, &out);
+
+  // 6. Loop detection at keyframes (relabels the recognised points before they are output).
+  // Not after a loss: the dead-reckoned pose that gates a loop is an extrapolation then, and a
+  // recognised place has already relabelled the points (RelocalizeFromDatabase).
+  if (out.is_keyframe && options_.loop.enable && !lost_before &&
+      (stereo || (prev_ && local_map_search_.has_map()))) {
+    t0 = Clock::now();
+    out.loop = DetectLoop(frame, motion, &cur, &out.place_held_by);
+    out.timings.loop_ms = MsSince(t0);
+  }
+
+  // 7. The measurement, and what the next frames keep of this one. Appearances are kept only
+  // where the System hands over local maps (System::Track) and the search may run.
+  FillObservations(cur, &out);
+  if (!stereo || options_.local_map.stereo_when_tracked_below > 0) {
     local_map_search_.Remember(cur.id, cur.detection, cur.landmark, cur.track_length);
   }
   relocalised_prev_ = relocalised_prev_ || relocalised;

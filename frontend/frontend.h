@@ -131,6 +131,33 @@ class Frontend {
     Pose T_w_c = Pose::Identity();  // Dead-reckoned pose.
   };
 
+  // Process's steps, in order.
+  // Takes over what the estimator said of the previous frame (its pose after a relocalisation,
+  // the last keyframe it tracked).
+  void FollowEstimator();
+  // Detects the left image into *cur (its landmarks unset) and returns the right image's points.
+  DetectedImage Detect(const Frame& frame, bool stereo, TrackedFrame* cur);
+  // The stereo points of *cur, and beside them (on the worker) the temporal matches predicted
+  // by the constant velocity, which TrackFromPrevious tries first.
+  std::optional<std::vector<Match>> MatchStereoAndPredict(const Frame& frame, bool stereo,
+                                                          const DetectedImage& right,
+                                                          TrackedFrame* cur);
+  // Tracks from the previous frame and dead-reckons cur->T_w_c (the last velocity when lost).
+  std::optional<MotionEstimate> TrackAndDeadReckon(
+      TrackedFrame* cur, std::optional<std::vector<Match>> predicted_matches,
+      TrackingStatus* status);
+  // Whether the guided local-map search runs for this frame: one camera always; stereo while
+  // the mean fraction of continued tracks stays below local_map.stereo_when_tracked_below.
+  bool GuidedSearchOn(FrameId frame, bool stereo, bool tracked, const TrackedFrame& cur);
+  // Gives every point of *cur its landmark (re-acquired, found in the local map, relocalised,
+  // or new); true when the frame was relocalised from the database.
+  bool FindLandmarks(const Frame& frame, const std::optional<MotionEstimate>& motion,
+                     bool guided, bool lost_before, TrackedFrame* cur);
+  // The keyframe decision (out->tracked_fraction is set from its evidence).
+  bool DecideKeyframe(const TrackedFrame& cur, bool stereo, bool guided, bool relocalised,
+                      FrameMeasurement* out);
+  void FillObservations(const TrackedFrame& cur, FrameMeasurement* out) const;
+
   // Matches prev -> cur around the predicted positions; empty prediction = no prior.
   // `p_from`: the points of `from` in its camera when known (default: its stereo points).
   std::vector<Match> MatchTemporal(
