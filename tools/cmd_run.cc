@@ -166,23 +166,17 @@ nlohmann::json StageTable(const std::vector<FrameStats>& stats) {
           {"total", column([](const FrameStats& s) { return s.total_ms; })}};
 }
 
-int RunRun(const std::vector<std::string>& args) {
+// Reading the flags: the options (--config, --estimator, --mode, --set), then the dataset's.
+SystemOptions OptionsFromFlags() {
   SystemOptions options;
   if (!FLAGS_config.empty()) LoadSystemOptions(FLAGS_config, &options);
   if (!FLAGS_estimator.empty()) SetSystemOption("estimator=" + FLAGS_estimator, &options);
   if (!FLAGS_mode.empty()) SetSystemOption("mode=" + FLAGS_mode, &options);
   for (const std::string& a : SetAssignments()) SetSystemOption(a, &options);
-  if (FLAGS_dump_config || FLAGS_dump_config_all) {
-    std::cout << SystemOptionsToYaml(options, FLAGS_dump_config_all ? OptionSet::kAll
-                                                                    : OptionSet::kUser);
-    return 0;
-  }
-  if (args.size() != 1) {
-    throw Error() << "expected one dataset folder, got " << args.size()
-                  << " arguments; usage: dala run DATASET --out DIR";
-  }
-  if (FLAGS_out.empty()) throw Error() << "--out DIR is required (where the results go)";
+  return options;
+}
 
+DatasetOptions DatasetOptionsFromFlags(const SystemOptions& options) {
   DatasetOptions dataset_options;
   dataset_options.format = ParseDatasetFormat(FLAGS_format);
   dataset_options.calibration_yaml = FLAGS_calibration;
@@ -200,7 +194,324 @@ int RunRun(const std::vector<std::string>& args) {
   dataset_options.force_mono = options.mode == "mono" && !options.mono_stereo_motion;
   std::string why;
   if (!dataset_options.IsValid(&why)) throw Error() << why;
-  std::unique_ptr<Dataset> dataset = OpenDataset(args[0], dataset_options);
+  return dataset_options;
+}
+
+// Running: every frame through the System (a frame whose image cannot be used is skipped unless
+// --strict), until the end or a stop signal; then the global refinement.
+struct FramesRun {
+  size_t done = 0;
+  int signal = 0;  // The stop signal received (0: none, the run reached the end).
+  double wall_s = 0.0;
+  std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
+};
+
+FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& stop) {
+  FramesRun run;
+  Progress progress(dataset->size(), FLAGS_progress);
+  const auto start = std::chrono::steady_clock::now();
+  Frame frame;
+  int skipped_so_far = 0;
+  TrackResult last;
+  while (!stop.received()) {
+    try {
+      if (!dataset->Next(&frame)) break;
+      last = system->Track(frame);
+    } catch (const FrameError& e) {
+      if (FLAGS_strict) throw;
+      if (system->stats().empty()) {
+        throw Error() << e.message() << "; the first frame of the run cannot be skipped: "
+                      << "restore it, or start after it with --first_frame " << e.frame().value + 1;
+      }
+      // A folder that lacks hundreds of frames (a partial copy) gets a few lines, not hundreds.
+      constexpr int kSkipWarnings = 10;
+      if (++skipped_so_far <= kSkipWarnings) {
+        progress.Say("[run] warning: frame " + std::to_string(e.frame().value) +
+                     " skipped (reported lost; --strict stops instead): " + e.message() + "\n");
+      } else if (skipped_so_far == kSkipWarnings + 1) {
+        progress.Say("[run] warning: more frames skipped, not listed here (report.json marks "
+                     "every one \"skipped\")\n");
+      }
+      system->SkipFrame(e.frame(), e.t_ns(), "skipped: " + e.message());
+      last.status = TrackingStatus::kLost;
+    }
+    ++run.done;
+    run.rss_mb.push_back(ResidentMemoryMb());
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    progress.Update(run.done, run.done / std::max(elapsed, 1e-9), last.status);
+  }
+  progress.Done();
+  run.signal = stop.received();
+  if (run.signal != 0) {
+    std::cerr << "[run] " << StopSignalName(run.signal) << ": stopped after " << run.done
+              << " of " << dataset->size() << " frames; writing the results of those frames\n";
+  }
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+// The global refinement of the whole run (the BA estimator's global bundle adjustment,
+// ba.final_ba); not after an interruption: the user asked to stop.
+RefinementSummary Refine(System* system, const FramesRun& run, const SystemOptions& options) {
+  RefinementSummary refinement;
+  if (run.signal != 0) {
+    refinement.report = "not run: the run was interrupted";
+    return refinement;
+  }
+  refinement = system->Finish();
+  if (options.estimator == "ba") {
+    std::cerr << "[run] " << refinement.report;
+    if (refinement.done) std::cerr << ", " << refinement.time_s << " s";
+    std::cerr << "\n";
+  }
+  return refinement;
+}
+
+// Writing the outputs: each file is written to a temporary and renamed, so none is ever half
+// written.
+struct FrameCounts {
+  std::vector<double> total_ms;
+  // Lost: frames the estimator could not estimate (extrapolated) and skipped frames (unreadable
+  // images: no pose); initialising: frames a mono estimator saw before its map existed. The
+  // trajectory leaves out the frames without a pose.
+  int failures = 0, skipped = 0, initialising = 0, keyframes = 0, loops = 0, loops_closed = 0;
+  int keyframes_in_map = -1;  // The estimator's map after the last frame (-1: it keeps none).
+  std::vector<double> loop_ms;  // Place recognition, per keyframe.
+};
+
+FrameCounts CountFrames(const std::vector<FrameStats>& stats) {
+  FrameCounts c;
+  for (const FrameStats& s : stats) {
+    if (!s.skipped) c.total_ms.push_back(s.total_ms);
+    c.loops += s.loop;
+    c.loops_closed += s.loop_closed;
+    if (s.keyframe) c.loop_ms.push_back(s.frontend.loop_ms);
+    c.initialising += s.status == TrackingStatus::kInitializing && !s.valid;
+    c.failures += !s.valid && s.status != TrackingStatus::kInitializing;
+    c.skipped += s.skipped;
+    c.keyframes += s.keyframe;
+    if (s.keyframes_in_map >= 0) c.keyframes_in_map = s.keyframes_in_map;
+  }
+  return c;
+}
+
+nlohmann::json Summary(const System& system, const FrameCounts& c, const FramesRun& run,
+                       const RefinementSummary& refinement, size_t frames_with_pose,
+                       size_t landmarks) {
+  const std::vector<double>& total_ms = c.total_ms;
+  const size_t frames = system.stats().size();
+  return {
+      {"frames", frames},
+      {"fps", frames / std::max(run.wall_s, 1e-9)},
+      {"ms_mean", total_ms.empty() ? 0.0 : std::accumulate(total_ms.begin(), total_ms.end(), 0.0) / total_ms.size()},
+      {"ms_median", Percentile(total_ms, 0.5)},
+      {"ms_p95", Percentile(total_ms, 0.95)},
+      {"ms_max", total_ms.empty() ? 0.0 : *std::max_element(total_ms.begin(), total_ms.end())},
+      {"stages_ms", StageTable(system.stats())},
+      {"tracking_failures", c.failures},  // Including the skipped frames.
+      {"frames_skipped", c.skipped},      // Unreadable images: no pose (note "skipped: ...").
+      // Stopped by SIGINT / SIGTERM before the end: the outputs cover the frames done.
+      {"interrupted", run.signal != 0},
+      {"frames_initialising", c.initialising},
+      {"frames_with_pose", frames_with_pose},
+      // "scale" is the evaluation's Sim(3) scale (below): what fixes the map's unit is this.
+      {"scale_source", system.ScaleDescription()},
+      // The stereo rig's disparity offset at the end and where it comes from (Estimator::
+      // DisparityOffsetNote; empty: none).
+      {"disparity_offset", system.estimator().DisparityOffsetNote()},
+      // Its value in pixels (null: the estimator has none).
+      {"disparity_offset_px", JsonOrNull(system.estimator().DisparityOffsetPx())},
+      {"keyframes", c.keyframes},
+      // Keyframes left in the estimator's map (made minus culled; -1: the estimator keeps none).
+      {"keyframes_in_map", c.keyframes_in_map},
+      // Keyframes with an entry in the place recognition (one per place on revisits).
+      {"places", system.places()},
+      {"loops_detected", c.loops},
+      {"loops_closed", c.loops_closed},
+      {"loop_ms_per_keyframe",
+       {{"median", Percentile(c.loop_ms, 0.5)},
+        {"p95", Percentile(c.loop_ms, 0.95)},
+        {"max", c.loop_ms.empty() ? 0.0 : *std::max_element(c.loop_ms.begin(), c.loop_ms.end())}}},
+      {"landmarks", landmarks},
+      // The global BA after the last frame (ba.final_ba): trajectory.txt is its result,
+      // trajectory_online.txt the trajectory before it (as each frame was estimated, with the
+      // window's later corrections); "online" below evaluates that one.
+      {"refinement",
+       {{"done", refinement.done},
+        {"report", refinement.report},
+        {"keyframes", refinement.keyframes},
+        {"landmarks", refinement.landmarks},
+        {"observations", refinement.observations},
+        {"outliers_removed", refinement.outliers_removed},
+        {"initial_cost", refinement.initial_cost},
+        {"final_cost", refinement.final_cost},
+        {"time_s", refinement.time_s}}}};
+}
+
+// Memory against frames: keyframes so far, kept in the map, places stored, and resident memory
+// (bounded by the place, not the time, is what this curve shows or not).
+void DrawMemoryChart(const std::vector<FrameStats>& stats, const std::vector<double>& rss_mb,
+                     const std::string& png_path) {
+  bench::ChartSeries keyframe_curve{"keyframes made", {}, {}};
+  // Culling (docs/backend.md): what the map keeps of them.
+  bench::ChartSeries map_curve{"keyframes in the map", {}, {}};
+  // One entry per place (docs/backend.md): what the memory follows on revisits.
+  bench::ChartSeries place_curve{"places stored", {}, {}};
+  bench::ChartSeries rss_curve{"resident memory", {}, {}};
+  int keyframes_so_far = 0;
+  int places_so_far = 0;
+  int in_map_so_far = 0;
+  for (size_t i = 0; i < stats.size(); ++i) {
+    keyframes_so_far += stats[i].keyframe;
+    if (!stats[i].skipped) places_so_far = stats[i].places;
+    if (!stats[i].skipped) in_map_so_far = stats[i].keyframes_in_map;
+    keyframe_curve.x.push_back(static_cast<double>(i));
+    keyframe_curve.y.push_back(keyframes_so_far);
+    if (in_map_so_far >= 0) {
+      map_curve.x.push_back(static_cast<double>(i));
+      map_curve.y.push_back(in_map_so_far);
+    }
+    place_curve.x.push_back(static_cast<double>(i));
+    place_curve.y.push_back(places_so_far);
+    if (i < rss_mb.size()) {
+      rss_curve.x.push_back(static_cast<double>(i));
+      rss_curve.y.push_back(rss_mb[i]);
+    }
+  }
+  bench::LineChartOptions top, bottom;
+  top.title = "keyframes made, kept in the map, and stored places";
+  top.x_label = "frame";
+  top.y_label = "count";
+  bottom.title = "resident memory of the process";
+  bottom.x_label = "frame";
+  bottom.y_label = "MiB";
+  std::vector<bench::ChartSeries> counts = {keyframe_curve, place_curve};
+  if (!map_curve.x.empty()) counts.insert(counts.begin() + 1, map_curve);
+  bench::DrawStackedLineCharts({{counts, top}, {{rss_curve}, bottom}}, png_path);
+}
+
+// The summary `dala run` prints.
+void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::json& summary,
+                  const RefinementSummary& refinement, size_t frames_with_pose,
+                  int64_t localised_at, const std::string& evaluation_error, bool plotted,
+                  const std::string& dir, const SystemOptions& options) {
+  const size_t frames = system.stats().size();
+  const int keyframes = c.keyframes;
+  std::cout << "frames      " << frames << " (" << c.failures << " lost"
+            << (c.skipped > 0 ? " of which " + std::to_string(c.skipped) + " skipped" : "") << ", "
+            << c.initialising << " initialising, " << frames_with_pose << " with a pose, "
+            << keyframes << " keyframes, " << c.loops << " loops detected, " << c.loops_closed
+            << " closed)\n"
+            << "scale       " << system.ScaleDescription() << "\n";
+  if (const std::string note = system.estimator().DisparityOffsetNote(); !note.empty()) {
+    std::cout << "disparity   offset " << note << "\n";
+  }
+  if (!FLAGS_map.empty()) {
+    std::cout << "saved map   " << FLAGS_map << ": "
+              << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)
+                                    : std::string("never localised (no frame recognised a "
+                                                  "mapped place; no frame has a pose)"))
+              << "\n";
+  }
+  std::cout << "memory      " << std::fixed << std::setprecision(0)
+            << summary["peak_rss_mb"].get<double>() << " MiB peak resident, " << keyframes
+            << " keyframes made"
+            << (c.keyframes_in_map >= 0 ? ", " + std::to_string(c.keyframes_in_map) + " in the map"
+                                        : std::string())
+            << ", " << system.places() << " places stored (memory.png)\n";
+  std::cout << "time        " << std::fixed << std::setprecision(1) << Percentile(c.total_ms, 0.5)
+            << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
+  if (summary.contains("ate")) {
+    std::cout << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>()
+              << " m (" << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
+              << (refinement.done ? ", after the global BA" : "") << ")\n";
+    if (summary.contains("online") && summary["online"].contains("ate")) {
+      std::cout << "ATE online  " << std::setprecision(4)
+                << summary["online"]["ate"]["rmse"].get<double>()
+                << " m (before the global BA: trajectory_online.txt)\n";
+    }
+    for (const auto& w : summary["warnings"])
+      std::cout << "note        " << w.get<std::string>() << "\n";
+  }
+  if (!evaluation_error.empty()) std::cout << "evaluation  not done: " << evaluation_error << "\n";
+  if (frames_with_pose < frames) {
+    std::cout << "note        " << frames - frames_with_pose
+              << " frames have no pose (skipped, or before the monocular initialisation): "
+                 "trajectory files leave them out; pair trajectory_kitti.txt with ground truth "
+                 "by time (trajectory.txt)\n";
+  }
+  std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
+            << "map.dmap, report.json, memory.png" << (plotted ? ", trajectory.png" : "")
+            << (refinement.done ? ", trajectory_online.txt" : "")
+            << ")\n";
+}
+
+// trajectory.txt (TUM), trajectory_online.txt (before the refinement, when there was one),
+// trajectory_kitti.txt, map.ply and map.dmap; returns the number of landmarks written.
+size_t WriteTrajectoryAndMap(const System& system, const Trajectory& trajectory,
+                             const Trajectory& online_trajectory, bool refined,
+                             const std::string& dir) {
+  WriteTrajectoryTum(dir + "/trajectory.txt", trajectory);
+  if (refined) WriteTrajectoryTum(dir + "/trajectory_online.txt", online_trajectory);
+  WriteTrajectoryKitti(dir + "/trajectory_kitti.txt", trajectory);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int64_t> ids;
+  for (const MapPoint& p : system.map()) {
+    points.push_back(p.p_w);
+    ids.push_back(p.id.value);
+  }
+  WritePly(dir + "/map.ply", points, nullptr, &ids);
+  system.SaveMap(dir + "/map.dmap");
+  return points.size();
+}
+
+// The evaluation against the dataset's ground truth, when it has one, into the summary (SE(3)
+// alignment, Sim(3) for one camera), and trajectory.png.
+struct RunEvaluation {
+  bool plotted = false;
+  std::string error;  // Why the evaluation could not be done (empty: done, or no ground truth).
+};
+
+RunEvaluation EvaluateRun(const Dataset& dataset, const Trajectory& trajectory,
+                          const Trajectory& online_trajectory, bool refined,
+                          const SystemOptions& options, const std::string& dir,
+                          nlohmann::json* summary) {
+  RunEvaluation out;
+  const auto& gt = dataset.ground_truth();
+  if (!gt || gt->empty()) return out;
+  EvalOptions eval;
+  eval.alignment = options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
+  const EvalResult result = Evaluate(*gt, trajectory, eval);
+  const nlohmann::json e = EvalResultToJson(result);
+  for (const auto& [key, value] : e.items()) (*summary)[key] = value;
+  if (refined) {
+    // The same evaluation of the trajectory as it was before the refinement.
+    (*summary)["online"] = EvalResultToJson(Evaluate(*gt, online_trajectory, eval));
+  }
+  if (result.ok) {
+    PlotEvaluation(*gt, AlignTrajectory(trajectory, result.alignment), result,
+                   dir + "/trajectory.png");
+    out.plotted = true;
+  } else {
+    out.error = result.error;
+  }
+  return out;
+}
+
+int RunRun(const std::vector<std::string>& args) {
+  const SystemOptions options = OptionsFromFlags();
+  if (FLAGS_dump_config || FLAGS_dump_config_all) {
+    std::cout << SystemOptionsToYaml(options, FLAGS_dump_config_all ? OptionSet::kAll
+                                                                    : OptionSet::kUser);
+    return 0;
+  }
+  if (args.size() != 1) {
+    throw Error() << "expected one dataset folder, got " << args.size()
+                  << " arguments; usage: dala run DATASET --out DIR";
+  }
+  if (FLAGS_out.empty()) throw Error() << "--out DIR is required (where the results go)";
+  std::unique_ptr<Dataset> dataset = OpenDataset(args[0], DatasetOptionsFromFlags(options));
   CreateDirectories(FLAGS_out);
 
   System system(dataset->rig(), options);
@@ -218,146 +529,21 @@ int RunRun(const std::vector<std::string>& args) {
   std::cerr << "[run] " << args[0] << " (" << DatasetFormatName(dataset->format()) << ", "
             << dataset->size() << " frames, " << (dataset->is_stereo() ? "stereo" : "mono")
             << ") with " << options.estimator << "/" << options.mode << "\n";
-  Progress progress(dataset->size(), FLAGS_progress);
-  const auto start = std::chrono::steady_clock::now();
-  Frame frame;
-  size_t done = 0;
-  int skipped_so_far = 0;
-  TrackResult last;
-  std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
-  while (!stop.received()) {
-    try {
-      if (!dataset->Next(&frame)) break;
-      last = system.Track(frame);
-    } catch (const FrameError& e) {
-      if (FLAGS_strict) throw;
-      if (system.stats().empty()) {
-        throw Error() << e.message() << "; the first frame of the run cannot be skipped: "
-                      << "restore it, or start after it with --first_frame " << e.frame().value + 1;
-      }
-      // A folder that lacks hundreds of frames (a partial copy) gets a few lines, not hundreds.
-      constexpr int kSkipWarnings = 10;
-      if (++skipped_so_far <= kSkipWarnings) {
-        progress.Say("[run] warning: frame " + std::to_string(e.frame().value) +
-                     " skipped (reported lost; --strict stops instead): " + e.message() + "\n");
-      } else if (skipped_so_far == kSkipWarnings + 1) {
-        progress.Say("[run] warning: more frames skipped, not listed here (report.json marks "
-                     "every one \"skipped\")\n");
-      }
-      system.SkipFrame(e.frame(), e.t_ns(), "skipped: " + e.message());
-      last.status = TrackingStatus::kLost;
-    }
-    ++done;
-    rss_mb.push_back(ResidentMemoryMb());
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    progress.Update(done, done / std::max(elapsed, 1e-9), last.status);
-  }
-  progress.Done();
-  const int signal = stop.received();
-  if (signal != 0) {
-    std::cerr << "[run] " << StopSignalName(signal) << ": stopped after " << done << " of "
-              << dataset->size() << " frames; writing the results of those frames\n";
-  }
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  // The causal (online) trajectory, then the global refinement of the whole run (not after an
-  // interruption: the user asked to stop).
+  const FramesRun run = TrackEveryFrame(dataset.get(), &system, stop);
+  // The causal (online) trajectory, then the global refinement of the whole run.
   const Trajectory online_trajectory = system.trajectory();
-  RefinementSummary refinement;
-  if (signal != 0) {
-    refinement.report = "not run: the run was interrupted";
-  } else {
-    // The BA estimator's global bundle adjustment (ba.final_ba: rig_offset, after_loop, always,
-    // off).
-    refinement = system.Finish();
-    if (options.estimator == "ba") {
-      std::cerr << "[run] " << refinement.report;
-      if (refinement.done) std::cerr << ", " << refinement.time_s << " s";
-      std::cerr << "\n";
-    }
-  }
+  const RefinementSummary refinement = Refine(&system, run, options);
 
   // Outputs: each file is written to a temporary and renamed, so none is ever half written.
   const std::string dir = FLAGS_out;
   const Trajectory trajectory = system.trajectory();
-  WriteTrajectoryTum(dir + "/trajectory.txt", trajectory);
-  if (refinement.done) WriteTrajectoryTum(dir + "/trajectory_online.txt", online_trajectory);
-  WriteTrajectoryKitti(dir + "/trajectory_kitti.txt", trajectory);
-  std::vector<Eigen::Vector3d> points;
-  std::vector<int64_t> ids;
-  for (const MapPoint& p : system.map()) {
-    points.push_back(p.p_w);
-    ids.push_back(p.id.value);
-  }
-  WritePly(dir + "/map.ply", points, nullptr, &ids);
-  system.SaveMap(dir + "/map.dmap");
+  const size_t landmarks =
+      WriteTrajectoryAndMap(system, trajectory, online_trajectory, refinement.done, dir);
 
   const auto& stats = system.stats();
-  std::vector<double> total_ms;
-  // Lost: frames the estimator could not estimate (extrapolated) and skipped frames (unreadable
-  // images: no pose); initialising: frames a mono estimator saw before its map existed. The
-  // trajectory leaves out the frames without a pose.
-  int failures = 0, skipped = 0, initialising = 0, keyframes = 0, loops = 0, loops_closed = 0;
-  int keyframes_in_map = -1;  // The estimator's map after the last frame (-1: it keeps none).
-  std::vector<double> loop_ms;  // Place recognition, per keyframe.
-  for (const FrameStats& s : stats) {
-    if (!s.skipped) total_ms.push_back(s.total_ms);
-    loops += s.loop;
-    loops_closed += s.loop_closed;
-    if (s.keyframe) loop_ms.push_back(s.frontend.loop_ms);
-    initialising += s.status == TrackingStatus::kInitializing && !s.valid;
-    failures += !s.valid && s.status != TrackingStatus::kInitializing;
-    skipped += s.skipped;
-    keyframes += s.keyframe;
-    if (s.keyframes_in_map >= 0) keyframes_in_map = s.keyframes_in_map;
-  }
-  nlohmann::json summary = {
-      {"frames", stats.size()},
-      {"fps", stats.size() / std::max(wall_s, 1e-9)},
-      {"ms_mean", total_ms.empty() ? 0.0 : std::accumulate(total_ms.begin(), total_ms.end(), 0.0) / total_ms.size()},
-      {"ms_median", Percentile(total_ms, 0.5)},
-      {"ms_p95", Percentile(total_ms, 0.95)},
-      {"ms_max", total_ms.empty() ? 0.0 : *std::max_element(total_ms.begin(), total_ms.end())},
-      {"stages_ms", StageTable(stats)},
-      {"tracking_failures", failures},  // Including the skipped frames.
-      {"frames_skipped", skipped},      // Unreadable images: no pose (note "skipped: ...").
-      // Stopped by SIGINT / SIGTERM before the end: the outputs cover the frames done.
-      {"interrupted", signal != 0},
-      {"frames_initialising", initialising},
-      {"frames_with_pose", trajectory.size()},
-      // "scale" is the evaluation's Sim(3) scale (below): what fixes the map's unit is this.
-      {"scale_source", system.ScaleDescription()},
-      // The stereo rig's disparity offset at the end and where it comes from (Estimator::
-      // DisparityOffsetNote; empty: none).
-      {"disparity_offset", system.estimator().DisparityOffsetNote()},
-      // Its value in pixels (null: the estimator has none).
-      {"disparity_offset_px", JsonOrNull(system.estimator().DisparityOffsetPx())},
-      {"keyframes", keyframes},
-      // Keyframes left in the estimator's map (made minus culled; -1: the estimator keeps none).
-      {"keyframes_in_map", keyframes_in_map},
-      // Keyframes with an entry in the place recognition (one per place on revisits).
-      {"places", system.places()},
-      {"loops_detected", loops},
-      {"loops_closed", loops_closed},
-      {"loop_ms_per_keyframe",
-       {{"median", Percentile(loop_ms, 0.5)},
-        {"p95", Percentile(loop_ms, 0.95)},
-        {"max", loop_ms.empty() ? 0.0 : *std::max_element(loop_ms.begin(), loop_ms.end())}}},
-      {"landmarks", points.size()},
-      // The global BA after the last frame (ba.final_ba): trajectory.txt is its result,
-      // trajectory_online.txt the trajectory before it (as each frame was estimated, with the
-      // window's later corrections); "online" below evaluates that one.
-      {"refinement",
-       {{"done", refinement.done},
-        {"report", refinement.report},
-        {"keyframes", refinement.keyframes},
-        {"landmarks", refinement.landmarks},
-        {"observations", refinement.observations},
-        {"outliers_removed", refinement.outliers_removed},
-        {"initial_cost", refinement.initial_cost},
-        {"final_cost", refinement.final_cost},
-        {"time_s", refinement.time_s}}}};
+  const FrameCounts counts = CountFrames(stats);
+  nlohmann::json summary =
+      Summary(system, counts, run, refinement, trajectory.size(), landmarks);
   // --map: the first frame placed in the saved map (-1: none).
   int64_t localised_at = -1;
   if (!FLAGS_map.empty()) {
@@ -369,74 +555,15 @@ int RunRun(const std::vector<std::string>& args) {
     }
     summary["saved_map"] = {{"path", FLAGS_map}, {"localised_at_frame", localised_at}};
   }
-  const auto& gt = dataset->ground_truth();
-  bool plotted = false;
-  std::string evaluation_error;
-  if (gt && !gt->empty()) {
-    EvalOptions eval;
-    eval.alignment = options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
-    const EvalResult result = Evaluate(*gt, trajectory, eval);
-    const nlohmann::json e = EvalResultToJson(result);
-    for (const auto& [key, value] : e.items()) summary[key] = value;
-    if (refinement.done) {
-      // The same evaluation of the trajectory as it was before the refinement.
-      summary["online"] = EvalResultToJson(Evaluate(*gt, online_trajectory, eval));
-    }
-    if (result.ok) {
-      PlotEvaluation(*gt, AlignTrajectory(trajectory, result.alignment), result,
-                     dir + "/trajectory.png");
-      plotted = true;
-    } else {
-      evaluation_error = result.error;
-    }
-  }
+  const RunEvaluation evaluation = EvaluateRun(*dataset, trajectory, online_trajectory,
+                                               refinement.done, options, dir, &summary);
   nlohmann::json frames = nlohmann::json::array();
   for (size_t i = 0; i < stats.size(); ++i) {
     frames.push_back(FrameJson(stats[i]));
-    if (i < rss_mb.size()) frames.back()["rss_mb"] = rss_mb[i];
+    if (i < run.rss_mb.size()) frames.back()["rss_mb"] = run.rss_mb[i];
   }
-  // Memory against frames: keyframes so far and resident memory (issue 14: bounded by the
-  // place, not the time, is what this curve shows or not).
-  const double peak_rss_mb = PeakResidentMemoryMb();
-  summary["peak_rss_mb"] = peak_rss_mb;
-  {
-    bench::ChartSeries keyframe_curve{"keyframes made", {}, {}};
-    // Culling (docs/backend.md): what the map keeps of them.
-    bench::ChartSeries map_curve{"keyframes in the map", {}, {}};
-    // One entry per place (docs/backend.md): what the memory follows on revisits.
-    bench::ChartSeries place_curve{"places stored", {}, {}};
-    bench::ChartSeries rss_curve{"resident memory", {}, {}};
-    int keyframes_so_far = 0;
-    int places_so_far = 0;
-    int in_map_so_far = 0;
-    for (size_t i = 0; i < stats.size(); ++i) {
-      keyframes_so_far += stats[i].keyframe;
-      if (!stats[i].skipped) places_so_far = stats[i].places;
-      if (!stats[i].skipped) in_map_so_far = stats[i].keyframes_in_map;
-      keyframe_curve.x.push_back(static_cast<double>(i));
-      keyframe_curve.y.push_back(keyframes_so_far);
-      if (in_map_so_far >= 0) {
-        map_curve.x.push_back(static_cast<double>(i));
-        map_curve.y.push_back(in_map_so_far);
-      }
-      place_curve.x.push_back(static_cast<double>(i));
-      place_curve.y.push_back(places_so_far);
-      if (i < rss_mb.size()) {
-        rss_curve.x.push_back(static_cast<double>(i));
-        rss_curve.y.push_back(rss_mb[i]);
-      }
-    }
-    bench::LineChartOptions top, bottom;
-    top.title = "keyframes made, kept in the map, and stored places";
-    top.x_label = "frame";
-    top.y_label = "count";
-    bottom.title = "resident memory of the process";
-    bottom.x_label = "frame";
-    bottom.y_label = "MiB";
-    std::vector<bench::ChartSeries> counts = {keyframe_curve, place_curve};
-    if (!map_curve.x.empty()) counts.insert(counts.begin() + 1, map_curve);
-    bench::DrawStackedLineCharts({{counts, top}, {{rss_curve}, bottom}}, dir + "/memory.png");
-  }
+  summary["peak_rss_mb"] = PeakResidentMemoryMb();
+  DrawMemoryChart(stats, run.rss_mb, dir + "/memory.png");
   const nlohmann::json report = {
       {"dataset",
        {{"path", args[0]},
@@ -450,57 +577,13 @@ int RunRun(const std::vector<std::string>& args) {
       {"summary", summary}};
   WriteFileAtomically(dir + "/report.json", [&](std::ostream& os) { os << report.dump(1) << "\n"; });
 
-  std::cout << "frames      " << stats.size() << " (" << failures << " lost"
-            << (skipped > 0 ? " of which " + std::to_string(skipped) + " skipped" : "") << ", "
-            << initialising << " initialising, " << trajectory.size() << " with a pose, "
-            << keyframes << " keyframes, " << loops << " loops detected, " << loops_closed
-            << " closed)\n"
-            << "scale       " << system.ScaleDescription() << "\n";
-  if (const std::string note = system.estimator().DisparityOffsetNote(); !note.empty()) {
-    std::cout << "disparity   offset " << note << "\n";
-  }
-  if (!FLAGS_map.empty()) {
-    std::cout << "saved map   " << FLAGS_map << ": "
-              << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)
-                                    : std::string("never localised (no frame recognised a "
-                                                  "mapped place; no frame has a pose)"))
-              << "\n";
-  }
-  std::cout << "memory      " << std::fixed << std::setprecision(0) << peak_rss_mb
-            << " MiB peak resident, " << keyframes << " keyframes made"
-            << (keyframes_in_map >= 0 ? ", " + std::to_string(keyframes_in_map) + " in the map"
-                                      : std::string())
-            << ", " << system.places() << " places stored (memory.png)\n";
-  std::cout << "time        " << std::fixed << std::setprecision(1) << Percentile(total_ms, 0.5)
-            << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
-  if (summary.contains("ate")) {
-    std::cout << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>()
-              << " m (" << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
-              << (refinement.done ? ", after the global BA" : "") << ")\n";
-    if (summary.contains("online") && summary["online"].contains("ate")) {
-      std::cout << "ATE online  " << std::setprecision(4)
-                << summary["online"]["ate"]["rmse"].get<double>()
-                << " m (before the global BA: trajectory_online.txt)\n";
-    }
-    for (const auto& w : summary["warnings"])
-      std::cout << "note        " << w.get<std::string>() << "\n";
-  }
-  if (!evaluation_error.empty()) std::cout << "evaluation  not done: " << evaluation_error << "\n";
-  if (trajectory.size() < stats.size()) {
-    std::cout << "note        " << stats.size() - trajectory.size()
-              << " frames have no pose (skipped, or before the monocular initialisation): "
-                 "trajectory files leave them out; pair trajectory_kitti.txt with ground truth "
-                 "by time (trajectory.txt)\n";
-  }
-  std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
-            << "map.dmap, report.json, memory.png" << (plotted ? ", trajectory.png" : "")
-            << (refinement.done ? ", trajectory_online.txt" : "")
-            << ")\n";
-  if (signal != 0) {
-    std::cerr << "[run] interrupted by " << StopSignalName(signal) << ": the results cover the "
-              << done << " frames done of " << dataset->size() << " (report.json: "
+  PrintSummary(system, counts, summary, refinement, trajectory.size(), localised_at,
+               evaluation.error, evaluation.plotted, dir, options);
+  if (run.signal != 0) {
+    std::cerr << "[run] interrupted by " << StopSignalName(run.signal) << ": the results cover the "
+              << run.done << " frames done of " << dataset->size() << " (report.json: "
               << "summary.interrupted)\n";
-    return 128 + signal;  // As a shell reports a process ended by the signal (130 for SIGINT).
+    return 128 + run.signal;  // As a shell reports a process ended by the signal (130 for SIGINT).
   }
   return 0;
 }
