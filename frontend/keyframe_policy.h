@@ -21,7 +21,7 @@ namespace dala {
 //  - `max_frames` frames passed (bounded gap for the backend) AND the view has changed at
 //    all: a median parallax of at least `min_parallax_px` or a rotation of at least a tenth of
 //    `max_rotation_rad`. A still camera (parallax of the image noise only) adds no keyframe, so
-//    its map and memory stay bounded (issue 14: 1,000 still frames used to add 100 keyframes of
+//    its map and memory stay bounded (otherwise 1,000 still frames would add 100 keyframes of
 //    ~0.5 MB each).
 // A frame never becomes a keyframe while fewer than `min_frames` frames passed.
 struct KeyframePolicyOptions {

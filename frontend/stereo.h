@@ -45,15 +45,16 @@ struct StereoOptions {
   // Stereo search range: disparities down to fx b / max_depth_m; 0 (default): no limit, down to
   // kMinStereoDisparityPx. A limit on the MEASURED depth keeps the far points whose disparity
   // noise came out large and drops those whose noise came out small, so the far points kept
-  // are biased near (rendered flight: the BA's disparity offset estimate -0.07 px with the old
-  // 80 m limit and the BA's 60 m, -0.002 px without), and it drops the far points that hold the
-  // rotation (flight ATE 0.1275 -> 0.0289 m without both; docs/results.md).
+  // are biased near (rendered flight: the BA's disparity offset estimate -0.07 px with an 80 m
+  // limit here and a 60 m one in the BA, -0.002 px without), and it drops the far points that
+  // hold the rotation (flight ATE 0.1275 m with both limits, 0.0289 m without; docs/backend.md).
   double max_depth_m = 0.0;
   // Depth is kept only for points nearer than this many baselines (and max_depth_m); see the
   // comment above. 0: no limit (the default: an exact rig, as rendered, loses accuracy with
-  // the limit: small_loop at 480x320 0.031 -> 0.148 m ATE). Real rigs with calibration
-  // residuals whose disparity offset is not calibrated (ba.calibrate_disparity_offset off) can
-  // set it per camera, as ORB-SLAM2's ThDepth (45 baselines is 24 m on KITTI's rig).
+  // the limit: small_loop at 480x320 0.031 m ATE without it, 0.148 m with one). Real rigs with
+  // calibration residuals whose disparity offset is not calibrated
+  // (ba.calibrate_disparity_offset off) can set it per camera, as ORB-SLAM2's ThDepth (45
+  // baselines is 24 m on KITTI's rig).
   double max_depth_baselines = 0.0;
   // ...unless fewer points than this are nearer: then the nearest far points keep their depth
   // until this many have one (the visual motion needs 3D-2D correspondences; a wide open place

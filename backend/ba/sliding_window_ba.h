@@ -118,8 +118,8 @@ class SlidingWindowBa {
     double loss_scale = 2.45;     // on the whitened residual norm; sqrt(5.991), chi2 95% mono.
     int max_num_iterations = 10;  // per solve: the work bound.
     // Per solve; 0 = no time limit (backend/ba/solver_time.h). A positive value is an opt-in
-    // budget that makes the run depend on the machine's load (a limit of 0.2 s was hit under
-    // load on KITTI: 0.1822 vs 0.1826 m ATE); the iteration cap bounds the work instead.
+    // budget that makes the run depend on the machine's load (a limit of 0.2 s is hit under
+    // load on KITTI); the iteration cap bounds the work instead.
     double max_solver_time_in_seconds = 0.0;
     double function_tolerance = 1e-6;
     // Stereo: estimate the rig's disparity offset delta (StereoIntrinsics::disparity_offset_px)

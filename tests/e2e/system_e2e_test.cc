@@ -260,8 +260,7 @@ TEST(SystemE2e, UnsupportedCombinationIsAClearError) {
   sim::SimOptions sim;
   sim.frames = 2;
   const sim::SyntheticSequence seq(sim);
-  // ba/mono exists since the monocular BA (it used to be the unsupported example); a rig that
-  // does not suit the estimator's mode is refused with a clear message.
+  // A rig that does not suit the estimator's mode is refused with a clear message.
   SystemOptions options;
   options.estimator = "ba";
   options.mode = "mono";

@@ -85,7 +85,7 @@ TEST(LoopClosureE2e, SmallLoopIsClosedAndAteDrops) {
             << run.loops_detected << ", closed " << run.loops_closed << std::endl;
   EXPECT_EQ(run.lost, 0);
   EXPECT_EQ(run.loops_closed, run.loops_detected);
-  EXPECT_LT(closed, 0.7 * open);                            // Measured: 0.072 -> 0.032 m.
+  EXPECT_LT(closed, 0.7 * open);                            // Measured: open 0.072 m, closed 0.032 m.
   testing::ExpectWithinBound("ba/stereo ATE / path, small loop with its loops closed",
                              100 * run.eval.ate.translation.rmse / path, 0.0233, "%");
 }
@@ -164,8 +164,7 @@ TEST(LoopClosureE2e, RevisitStoresNoNewPlacesAndCullsItsKeyframes) {
 // recognised and closed over Sim(3) (the current keyframe placed by PnP on the old landmarks,
 // the scale from the recognised landmarks mapped on both sides). Measured: Sim(3) ATE 0.0736 m
 // with the loop, 0.0754 m with the same run not corrected (`ba.loop_correct=0`): the correction
-// pays only 2 % on this run (docs/monocular.md records a larger gain with an earlier window:
-// 0.1006 -> 0.0576 m). Bounds: 1.5x the first, and closed below not corrected.
+// pays only 2 % on this run. Bounds: 1.5x the best recorded, and closed below not corrected.
 TEST(LoopClosureE2e, MonoSmallLoopIsClosedOverSim3) {
   sim::SimOptions sim;
   sim.preset = "small_loop";

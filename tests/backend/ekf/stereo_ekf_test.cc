@@ -111,8 +111,9 @@ TEST(StereoEkfTest, PoseNeesIsConsistentOverMonteCarloRuns) {
   options.motion_covariance_scale = 1.0;
   const NeesCurve c = MonteCarloPoseNees(25, 40, false, options);
   PrintNees("stereo EKF, independent motion noise", c);
-  // docs/ekf.md. With the classic error state the mean was 6.87 and 11 of 39 frames were above
-  // the band, growing with time (spurious information on the unobservable directions).
+  // docs/ekf.md. With the classic error state (docs/ekf.md) the mean is 6.87 and 11 of 39
+  // frames are above the band, growing with time (spurious information on the unobservable
+  // directions).
   EXPECT_LE(c.outside, 4);  // About 10 %; 5 % expected by chance.
   EXPECT_GT(c.mean, c.lo);
   EXPECT_LT(c.mean, c.hi);

@@ -174,7 +174,7 @@ TEST(KittiDataset, ErrorsNameTheFileAndTheFix) {
                 HasSubstr("calib.txt:2: 'P1:' has 11 numbers, expected 12"));
   }
   {
-    // fx = 0 in P1: named as such (the message used to be "baseline inf must be >= 0").
+    // fx = 0 in P1: named as such (not as a consequence, "baseline inf must be >= 0").
     const std::string seq = fresh("p1_fx0");
     WriteText(seq + "/calib.txt",
               "P0: 1 0 0 0 0 1 0 0 0 0 1 0\nP1: 0 0 0 -0.5 0 1 0 0 0 0 1 0\n");

@@ -274,8 +274,8 @@ TEST(MapFileTest, FlippedBytesNeverCrashOrAllocateWithoutBound) {
 }
 
 // Every count and size field set to extreme values, with a valid checksum: a dala::Error, never
-// a std::length_error or a multi-GB allocation (0xFFFFFFFF as a descriptor size used to pass the
-// size check as int -1 and abort in std::vector::resize).
+// a std::length_error or a multi-GB allocation (0xFFFFFFFF as a descriptor size must not pass
+// the size check as int -1 and abort in std::vector::resize).
 TEST(MapFileTest, ExtremeCountsWithAValidChecksumAreErrors) {
   testing::TempDir dir;
   WriteMapFile(dir / "m.dmap", MakeMap(121));

@@ -43,8 +43,8 @@ TEST(TrajectoryIo, TumRoundTrip) {
   }
 }
 
-// Times between -1 s and 0 keep their sign (they used to be written as positive, and the
-// reader then refused the file as going back in time).
+// Times between -1 s and 0 keep their sign (written as positive, the reader would refuse the
+// file as going back in time).
 TEST(TrajectoryIo, TumKeepsTheSignOfTimesBetweenMinusOneAndZero) {
   testing::TempDir dir;
   Trajectory t;
