@@ -26,6 +26,7 @@
 #include "tools/bench/line_chart.h"
 #include "tools/command.h"
 #include "tools/process_memory.h"
+#include "tools/report/frame_video.h"
 #include "tools/report/report_data.h"
 #include "tools/report/report_html.h"
 #include "tools/stop_signal.h"
@@ -57,6 +58,11 @@ DEFINE_bool(progress, true, "run: show progress on stderr");
 DEFINE_bool(strict, false,
             "run: stop with an error (exit 2) at a missing, unreadable or wrongly sized image "
             "instead of skipping its frame");
+
+DEFINE_string(video, "",
+              "run: also write FILE.mp4, a video of what the frontend saw: each frame with its "
+              "tracked points by track age, stereo matches, state, keyframe flag and the path so "
+              "far from above (docs/pipeline.md; off when empty)");
 
 DEFINE_string(map, "",
               "run: start in the saved map FILE (the map.dmap of an earlier run): frames are "
@@ -211,7 +217,8 @@ struct FramesRun {
   std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
 };
 
-FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& stop) {
+FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& stop,
+                          report::FrameVideo* video) {
   FramesRun run;
   Progress progress(dataset->size(), FLAGS_progress);
   const auto start = std::chrono::steady_clock::now();
@@ -222,6 +229,10 @@ FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& st
     try {
       if (!dataset->Next(&frame)) break;
       last = system->Track(frame);
+      if (video != nullptr) {
+        video->Add(frame.left, system->last_measurement(), system->stats().back(),
+                   last.valid ? std::optional<Pose>(last.T_w_c) : std::nullopt);
+      }
     } catch (const FrameError& e) {
       if (FLAGS_strict) throw;
       if (system->stats().empty()) {
@@ -567,7 +578,10 @@ int RunRun(const std::vector<std::string>& args) {
   std::cerr << "[run] " << args[0] << " (" << DatasetFormatName(dataset->format()) << ", "
             << dataset->size() << " frames, " << (dataset->is_stereo() ? "stereo" : "mono")
             << ") with " << options.estimator << "/" << options.mode << "\n";
-  const FramesRun run = TrackEveryFrame(dataset.get(), &system, stop);
+  // --video: what the frontend saw, frame by frame.
+  std::optional<report::FrameVideo> video;
+  if (!FLAGS_video.empty()) video.emplace(FLAGS_video);
+  const FramesRun run = TrackEveryFrame(dataset.get(), &system, stop, video ? &*video : nullptr);
   // The causal (online) trajectory, then the global refinement of the whole run.
   const Trajectory online_trajectory = system.trajectory();
   const RefinementSummary refinement = Refine(&system, run, options);
@@ -624,6 +638,14 @@ int RunRun(const std::vector<std::string>& args) {
                                        std::move(map_points), report, dir);
 
   std::cout << printed.str();
+  if (video) {
+    const int video_frames = video->frames();
+    const double video_ms = video->ms_per_frame();
+    const std::string video_path = video->Close();
+    std::cout << "video       " << video_path << " (" << video_frames << " frames, "
+              << std::fixed << std::setprecision(1) << video_ms << " ms per frame to draw and "
+              << "encode)\n";
+  }
   std::cout << "report      " << dir << "/report.html (3D view, charts; written in " << std::fixed
             << std::setprecision(0) << report_ms << " ms)\n";
   if (run.signal != 0) {
@@ -640,7 +662,7 @@ const CommandRegistrar kRegistrar(
      "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
      "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
      "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-     "         [--map FILE] [--dump_config | --dump_config_all]\n"
+     "         [--map FILE] [--video FILE.mp4] [--dump_config | --dump_config_all]\n"
      "       dala run VIDEO|IMAGE_FOLDER --calibration FILE --out DIR [--mode mono]\n"
      "         [--fps HZ] [--times FILE] [--right_folder DIR] [--stereo_layout side_by_side]\n"
      "         [--ground_truth FILE]\n"
@@ -652,8 +674,10 @@ const CommandRegistrar kRegistrar(
      "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
      "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
      "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"
-     "ground truth), trajectory.png (estimate over ground truth) and memory.png (keyframes\n"
-     "and resident memory against frames; report.json has each frame's rss_mb).\n\n"
+     "ground truth), trajectory.png (estimate over ground truth), memory.png (keyframes\n"
+     "and resident memory against frames; report.json has each frame's rss_mb) and\n"
+     "report.html (the run in 3D with its charts and summary, one file that opens from disk;\n"
+     "`dala view DIR` writes it again). --video FILE.mp4 also writes what the frontend saw.\n\n"
      "--set ba.final_ba=always (or after_loop: when the run closed a loop) refines the whole run\n"
      "after its last frame by a global bundle adjustment over every keyframe (BA estimator; by\n"
      "default only for a stereo rig whose disparity offset was calibrated, with the offset free:\n"
