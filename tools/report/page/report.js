@@ -149,13 +149,28 @@
     scene.add(new THREE.Line(lineGeometry(gt), new THREE.LineBasicMaterial({color: COLOUR_GT})));
     addLegend(COLOUR_GT, 'ground truth');
   }
+  // Drawn over the map and the keyframes (no depth test, and in three.js's transparent pass, which
+  // comes after the opaque one and the frusta), so that a dense map never hides it.
+  function onTop(object, order) {
+    object.material.depthTest = false;
+    object.material.transparent = true;
+    object.renderOrder = order;
+    return object;
+  }
   if (path.length) {
-    scene.add(new THREE.Line(lineGeometry(path), new THREE.LineBasicMaterial({color: COLOUR_PATH})));
+    scene.add(onTop(new THREE.Line(lineGeometry(path),
+                                   new THREE.LineBasicMaterial({color: COLOUR_PATH})), 5));
     addLegend(COLOUR_PATH, 'estimate');
   }
 
-  // A camera frustum (pyramid) at a pose, as line segments appended to `out`.
-  const frustumDepth = radius * 0.025;
+  // A camera frustum (pyramid) at a pose, as line segments appended to `out`. Its depth: 80 % of
+  // the median distance between keyframes (frusta side by side, not piled up), within 0.5 % and
+  // 2.5 % of the scene's size.
+  const spacings = [];
+  for (let i = 1; i < keyframes.length; ++i) spacings.push(keyframes[i].distanceTo(keyframes[i - 1]));
+  spacings.sort(function (a, b) { return a - b; });
+  const medianSpacing = spacings.length ? spacings[spacings.length >> 1] : radius;
+  const frustumDepth = Math.min(radius * 0.025, Math.max(radius * 0.005, 0.8 * medianSpacing));
   const aspect = data.aspect || 4 / 3;
   function frustum(position, q, depth, out) {
     const w = depth * 0.5 * aspect, h = depth * 0.5;
@@ -170,7 +185,8 @@
     const segments = [];
     for (let i = 0; i < keyframes.length; ++i) frustum(keyframes[i], keyframesQ[i], frustumDepth, segments);
     scene.add(new THREE.LineSegments(lineGeometry(segments),
-                                     new THREE.LineBasicMaterial({color: COLOUR_KEYFRAME})));
+                                     new THREE.LineBasicMaterial({color: COLOUR_KEYFRAME,
+                                                                  transparent: true, opacity: 0.6})));
     addLegend(COLOUR_KEYFRAME, keyframes.length + ' keyframes');
   }
   // Loop edges: closed (the estimator corrected with it) and detected only.
@@ -180,21 +196,21 @@
                                                            new THREE.Vector3().fromArray(loop.b));
   }
   if (loopSegments.closed.length) {
-    scene.add(new THREE.LineSegments(lineGeometry(loopSegments.closed),
-                                     new THREE.LineBasicMaterial({color: COLOUR_LOOP_CLOSED})));
+    scene.add(onTop(new THREE.LineSegments(lineGeometry(loopSegments.closed),
+                                           new THREE.LineBasicMaterial({color: COLOUR_LOOP_CLOSED})), 6));
     addLegend(COLOUR_LOOP_CLOSED, (loopSegments.closed.length / 2) + ' loops closed');
   }
   if (loopSegments.detected.length) {
-    scene.add(new THREE.LineSegments(lineGeometry(loopSegments.detected),
-                                     new THREE.LineBasicMaterial({color: COLOUR_LOOP_DETECTED})));
+    scene.add(onTop(new THREE.LineSegments(lineGeometry(loopSegments.detected),
+                                           new THREE.LineBasicMaterial({color: COLOUR_LOOP_DETECTED})), 6));
     addLegend(COLOUR_LOOP_DETECTED, (loopSegments.detected.length / 2) + ' loops detected, not closed');
   }
   function markers(flat, colour, size, label) {
     if (!flat || !flat.length) return;
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.Float32BufferAttribute(flat, 3));
-    scene.add(new THREE.Points(g, new THREE.PointsMaterial({color: colour, size: size,
-                                                             sizeAttenuation: false})));
+    scene.add(onTop(new THREE.Points(g, new THREE.PointsMaterial({color: colour, size: size,
+                                                                   sizeAttenuation: false})), 7));
     addLegend(colour, (flat.length / 3) + ' ' + label);
   }
   markers(data.lost.xyz, COLOUR_LOST, 7, 'lost');
@@ -202,14 +218,16 @@
 
   // The camera marker: a sphere and a frustum, drawn over everything.
   const marker = new THREE.Group();
-  const markerMaterial = new THREE.MeshBasicMaterial({color: COLOUR_MARKER, depthTest: false});
+  const markerMaterial = new THREE.MeshBasicMaterial({color: COLOUR_MARKER, depthTest: false,
+                                                      transparent: true});
   const sphere = new THREE.Mesh(new THREE.SphereGeometry(radius * 0.018, 16, 12), markerMaterial);
   sphere.renderOrder = 10;
   marker.add(sphere);
   const markerFrustum = [];
-  frustum(new THREE.Vector3(), new THREE.Quaternion(), frustumDepth * 2.5, markerFrustum);
+  frustum(new THREE.Vector3(), new THREE.Quaternion(), radius * 0.05, markerFrustum);
   const markerLines = new THREE.LineSegments(
-      lineGeometry(markerFrustum), new THREE.LineBasicMaterial({color: COLOUR_MARKER, depthTest: false}));
+      lineGeometry(markerFrustum),
+      new THREE.LineBasicMaterial({color: COLOUR_MARKER, depthTest: false, transparent: true}));
   markerLines.renderOrder = 10;
   marker.add(markerLines);
   marker.visible = path.length > 0;
