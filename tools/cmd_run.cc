@@ -415,53 +415,49 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
   const size_t frames = system.stats().size();
   const int keyframes = c.keyframes;
   out << "frames      " << frames << " (" << c.failures << " lost"
-            << (c.skipped > 0 ? " of which " + std::to_string(c.skipped) + " skipped" : "") << ", "
-            << c.initialising << " initialising, " << frames_with_pose << " with a pose, "
-            << keyframes << " keyframes, " << c.loops << " loops detected, " << c.loops_closed
-            << " closed)\n"
-            << "scale       " << system.ScaleDescription() << "\n";
+      << (c.skipped > 0 ? " of which " + std::to_string(c.skipped) + " skipped" : "") << ", "
+      << c.initialising << " initialising, " << frames_with_pose << " with a pose, " << keyframes
+      << " keyframes, " << c.loops << " loops detected, " << c.loops_closed << " closed)\n"
+      << "scale       " << system.ScaleDescription() << "\n";
   if (const std::string note = system.estimator().DisparityOffsetNote(); !note.empty()) {
     out << "disparity   offset " << note << "\n";
   }
   if (!FLAGS_map.empty()) {
     out << "saved map   " << FLAGS_map << ": "
-              << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)
-                                    : std::string("never localised (no frame recognised a "
-                                                  "mapped place; no frame has a pose)"))
-              << "\n";
+        << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)
+                              : std::string("never localised (no frame recognised a "
+                                            "mapped place; no frame has a pose)"))
+        << "\n";
   }
   out << "memory      " << std::fixed << std::setprecision(0)
-            << summary["peak_rss_mb"].get<double>() << " MiB peak resident, " << keyframes
-            << " keyframes made"
-            << (c.keyframes_in_map >= 0 ? ", " + std::to_string(c.keyframes_in_map) + " in the map"
-                                        : std::string())
-            << ", " << system.places() << " places stored (memory.png)\n";
+      << summary["peak_rss_mb"].get<double>() << " MiB peak resident, " << keyframes
+      << " keyframes made"
+      << (c.keyframes_in_map >= 0 ? ", " + std::to_string(c.keyframes_in_map) + " in the map"
+                                  : std::string())
+      << ", " << system.places() << " places stored (memory.png)\n";
   out << "time        " << std::fixed << std::setprecision(1) << Percentile(c.total_ms, 0.5)
-            << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
+      << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {
-    out << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>()
-              << " m (" << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
-              << (refinement.done ? ", after the global BA" : "") << ")\n";
+    out << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>() << " m ("
+        << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
+        << (refinement.done ? ", after the global BA" : "") << ")\n";
     if (summary.contains("online") && summary["online"].contains("ate")) {
       out << "ATE online  " << std::setprecision(4)
-                << summary["online"]["ate"]["rmse"].get<double>()
-                << " m (before the global BA: trajectory_online.txt)\n";
+          << summary["online"]["ate"]["rmse"].get<double>()
+          << " m (before the global BA: trajectory_online.txt)\n";
     }
-    for (const auto& w : summary["warnings"])
-      out << "note        " << w.get<std::string>() << "\n";
+    for (const auto& w : summary["warnings"]) out << "note        " << w.get<std::string>() << "\n";
   }
   if (!evaluation_error.empty()) out << "evaluation  not done: " << evaluation_error << "\n";
   if (frames_with_pose < frames) {
     out << "note        " << frames - frames_with_pose
-              << " frames have no pose (skipped, or before the monocular initialisation): "
-                 "trajectory files leave them out; pair trajectory_kitti.txt with ground truth "
-                 "by time (trajectory.txt)\n";
+        << " frames have no pose (skipped, or before the monocular initialisation): "
+           "trajectory files leave them out; pair trajectory_kitti.txt with ground truth "
+           "by time (trajectory.txt)\n";
   }
   out << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
-            << "map.dmap, report.json, report.html, memory.png"
-            << (plotted ? ", trajectory.png" : "")
-            << (refinement.done ? ", trajectory_online.txt" : "")
-            << ")\n";
+      << "map.dmap, report.json, report.html, memory.png" << (plotted ? ", trajectory.png" : "")
+      << (refinement.done ? ", trajectory_online.txt" : "") << ")\n";
 }
 
 // trajectory.txt (TUM), trajectory_online.txt (before the refinement, when there was one),
@@ -551,8 +547,8 @@ double WriteReport(const Dataset& dataset, const Trajectory& trajectory,
 int RunRun(const std::vector<std::string>& args) {
   const SystemOptions options = OptionsFromFlags();
   if (FLAGS_dump_config || FLAGS_dump_config_all) {
-    std::cout << SystemOptionsToYaml(options, FLAGS_dump_config_all ? OptionSet::kAll
-                                                                    : OptionSet::kUser);
+    std::cout << SystemOptionsToYaml(options,
+                                     FLAGS_dump_config_all ? OptionSet::kAll : OptionSet::kUser);
     return 0;
   }
   if (args.size() != 1) {

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
@@ -31,8 +30,8 @@ cv::Scalar AgeColour(int track_length) {
 
 std::string TempPathFor(const std::string& path) {
   const std::filesystem::path p(path);
-  return (p.parent_path() / ("." + p.stem().string() + ".tmp." + std::to_string(getpid()) +
-                             p.extension().string()))
+  return (p.parent_path() /
+          ("." + p.stem().string() + ".tmp." + std::to_string(getpid()) + p.extension().string()))
       .string();
 }
 
@@ -99,8 +98,9 @@ cv::Mat FrameVideo::Draw(const cv::Mat& left, const FrameMeasurement& m,
   // Header: frame, state, keyframe, counts, loop.
   const bool lost = s.status == TrackingStatus::kLost;
   const cv::Scalar state_colour = lost ? cv::Scalar(60, 60, 255)
-                                  : s.status == TrackingStatus::kTracking ? cv::Scalar(80, 220, 80)
-                                                                          : cv::Scalar(180, 180, 180);
+                                  : s.status == TrackingStatus::kTracking
+                                      ? cv::Scalar(80, 220, 80)
+                                      : cv::Scalar(180, 180, 180);
   const double scale = left.cols >= 800 ? 0.55 : 0.42;
   int x = 6;
   const auto text = [&](const std::string& t, const cv::Scalar& colour) {

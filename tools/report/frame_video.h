@@ -14,12 +14,11 @@
 // video is ever left under FILE (the destructor removes the temporary of an unclosed video).
 
 #include <chrono>
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
-#include <opencv2/videoio.hpp>
 
 #include "backend/system.h"
 #include "core/frame_measurement.h"

@@ -1,10 +1,9 @@
 #include "tools/report/report_data.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <map>
-
-#include <Eigen/Geometry>
 
 #include "core/eval/alignment.h"
 
@@ -113,7 +112,8 @@ nlohmann::json ReportDataJson(const ReportInput& input) {
   // Map points, decimated above kMaxReportPoints.
   {
     const size_t total = input.points_w.size();
-    const size_t stride = total > kMaxReportPoints ? (total + kMaxReportPoints - 1) / kMaxReportPoints : 1;
+    const size_t stride =
+        total > kMaxReportPoints ? (total + kMaxReportPoints - 1) / kMaxReportPoints : 1;
     nlohmann::json xyz = nlohmann::json::array();
     size_t shown = 0;
     for (size_t i = 0; i < total; i += stride) {
@@ -135,7 +135,8 @@ nlohmann::json ReportDataJson(const ReportInput& input) {
   }
   if (evaluated) {
     nlohmann::json xyz = nlohmann::json::array();
-    for (const StampedPose& p : input.ground_truth->poses) AppendPosition(p.T_w_c.translation(), &xyz);
+    for (const StampedPose& p : input.ground_truth->poses)
+      AppendPosition(p.T_w_c.translation(), &xyz);
     data["ground_truth"] = {{"xyz", std::move(xyz)}};
     // The absolute error of each evaluated pose, against its time.
     const EvalResult& e = *input.evaluation;
@@ -165,12 +166,14 @@ nlohmann::json ReportDataJson(const ReportInput& input) {
     data["keyframes"] = {{"frame", std::move(frame)}, {"xyz", std::move(xyz)}, {"q", std::move(q)}};
   }
   // Per frame: the charts, lost and relocalised frames, loops.
-  nlohmann::json charts = {{"t", nlohmann::json::array()},        {"frame", nlohmann::json::array()},
-                           {"features", nlohmann::json::array()}, {"tracked", nlohmann::json::array()},
-                           {"landmarks", nlohmann::json::array()}, {"keyframe", nlohmann::json::array()},
-                           {"ms", nlohmann::json::array()},       {"status", nlohmann::json::array()}};
+  nlohmann::json charts = {
+      {"t", nlohmann::json::array()},         {"frame", nlohmann::json::array()},
+      {"features", nlohmann::json::array()},  {"tracked", nlohmann::json::array()},
+      {"landmarks", nlohmann::json::array()}, {"keyframe", nlohmann::json::array()},
+      {"ms", nlohmann::json::array()},        {"status", nlohmann::json::array()}};
   nlohmann::json lost = {{"frame", nlohmann::json::array()}, {"xyz", nlohmann::json::array()}};
-  nlohmann::json relocalised = {{"frame", nlohmann::json::array()}, {"xyz", nlohmann::json::array()}};
+  nlohmann::json relocalised = {{"frame", nlohmann::json::array()},
+                                {"xyz", nlohmann::json::array()}};
   nlohmann::json loops = nlohmann::json::array();
   if (input.frames.is_array()) {
     std::map<int64_t, double> time_of_frame;

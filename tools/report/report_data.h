@@ -10,13 +10,12 @@
 // camera); without ground truth, in the estimate's world. "Up" is the first pose's camera -y axis
 // (the camera frame is y down): the map's height and the top view follow it.
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include "core/eval/evaluate.h"
 #include "core/geometry.h"
@@ -47,7 +46,7 @@ struct ReportInput {
   // loop_old_frame, ms) and "summary"; null or empty for a map alone.
   nlohmann::json frames;
   nlohmann::json summary;
-  std::string summary_text;  // The summary `dala run` printed.
+  std::string summary_text;         // The summary `dala run` printed.
   double image_aspect = 4.0 / 3.0;  // Width / height of the images (the keyframe frusta).
 };
 

@@ -9,8 +9,8 @@ namespace {
 // JSON inside a <script> element: "</" would end the element, so it is written "<\/" (the
 // same string in JSON; "</" can only occur inside a string there).
 std::string ScriptSafeJson(const nlohmann::json& data) {
-  std::string text = data.dump(-1, ' ', /*ensure_ascii=*/false,
-                               nlohmann::json::error_handler_t::replace);
+  std::string text =
+      data.dump(-1, ' ', /*ensure_ascii=*/false, nlohmann::json::error_handler_t::replace);
   std::string out;
   out.reserve(text.size() + 16);
   for (size_t i = 0; i < text.size(); ++i) {
@@ -28,11 +28,20 @@ std::string EscapeHtml(const std::string& s) {
   std::string out;
   for (const char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;

@@ -10,9 +10,8 @@
 // the printed summary. The page writes its state into document.title ("dala report: ready",
 // "dala report: error: ..."), which a headless browser can read.
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace dala::report {
 

@@ -70,14 +70,14 @@ ReportInput ReportInputFromRunFolder(const std::string& dir, std::string* note) 
     }
     if (dataset->ground_truth() && !dataset->ground_truth()->empty()) {
       EvalOptions eval;
-      eval.alignment =
-          report.value("mode", std::string()) == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
+      eval.alignment = report.value("mode", std::string()) == "mono" ? AlignmentType::kSim3
+                                                                     : AlignmentType::kSE3;
       input.ground_truth = dataset->ground_truth();
       input.evaluation = Evaluate(*input.ground_truth, input.trajectory, eval);
     }
   } catch (const Error& e) {
-    *note = "no ground truth shown: the dataset " + input.title +
-            " could not be opened again (" + e.what() + ")";
+    *note = "no ground truth shown: the dataset " + input.title + " could not be opened again (" +
+            e.what() + ")";
   }
   return input;
 }

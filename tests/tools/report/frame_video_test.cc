@@ -1,15 +1,15 @@
 // `dala run --video`: FrameVideo draws each frame and writes a video that OpenCV reads back with
 // every frame, moved into place only when closed.
+#include "tools/report/frame_video.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <string>
-
 #include <opencv2/videoio.hpp>
+#include <string>
 
 #include "core/error.h"
 #include "tests/test_util.h"
-#include "tools/report/frame_video.h"
 
 namespace dala::report {
 namespace {
@@ -67,8 +67,9 @@ TEST(FrameVideo, NamesTheFlagForAFileItCannotWrite) {
   testing::TempDir dir;
   EXPECT_NE(testing::ErrorOf([&] { FrameVideo video(dir / "frames.gif"); }).find(".mp4"),
             std::string::npos);
-  EXPECT_NE(testing::ErrorOf([&] { FrameVideo video(dir / "no/such/folder/frames.mp4"); })
-                .find("does not exist"),
+  EXPECT_NE(testing::ErrorOf([&] {
+              FrameVideo video(dir / "no/such/folder/frames.mp4");
+            }).find("does not exist"),
             std::string::npos);
 }
 

@@ -8,10 +8,9 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
@@ -38,8 +37,8 @@ std::string ChromiumFlags(const testing::TempDir& dir, const std::string& profil
   return std::string(kChromium) +
          " --headless=new --no-sandbox --disable-gpu --use-gl=swiftshader"
          " --enable-unsafe-swiftshader --disable-background-networking --disable-component-update"
-         " --disable-sync --no-first-run --user-data-dir=" + (dir / profile) +
-         " --window-size=1200,800";
+         " --disable-sync --no-first-run --user-data-dir=" +
+         (dir / profile) + " --window-size=1200,800";
 }
 
 // A screenshot of `url`; the browser's log (console messages included) goes to `log`.
@@ -87,8 +86,8 @@ TEST(ReportBrowser, DrawsThePathAndMovesTheMarkerWithTheTime) {
   sim.height = 240;
   sim.seed = 3;
   sim::WriteSyntheticDataset(sim, dir / "seq", false);
-  ASSERT_EQ(System(std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " +
-                   (dir / "run") + " --progress=false > /dev/null 2> " + (dir / "run.log")),
+  ASSERT_EQ(System(std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " + (dir / "run") +
+                   " --progress=false > /dev/null 2> " + (dir / "run.log")),
             0)
       << ReadAll(dir / "run.log");
   const std::string html = dir / "run/report.html";

@@ -1,11 +1,12 @@
 // report.html's data and page (tools/report): what the page is given of a run, decimation of
 // large maps, loop edges, lost and relocalised frames, the frame of reference, and a page whose
 // inline data cannot end its <script> element early.
+#include "tools/report/report_data.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
 
-#include "tools/report/report_data.h"
 #include "tools/report/report_html.h"
 
 namespace dala::report {
@@ -18,9 +19,17 @@ Pose At(double x) {
 }
 
 nlohmann::json Frame(int i, const std::string& status, bool keyframe = false) {
-  return {{"frame", i}, {"t", 0.1 * i}, {"status", status}, {"keyframe", keyframe},
-          {"features", 100}, {"tracked", 80}, {"landmarks", 50}, {"loop", false},
-          {"loop_closed", false}, {"loop_old_frame", nullptr}, {"ms", {{"total", 12.5}}}};
+  return {{"frame", i},
+          {"t", 0.1 * i},
+          {"status", status},
+          {"keyframe", keyframe},
+          {"features", 100},
+          {"tracked", 80},
+          {"landmarks", 50},
+          {"loop", false},
+          {"loop_closed", false},
+          {"loop_old_frame", nullptr},
+          {"ms", {{"total", 12.5}}}};
 }
 
 ReportInput FiveFrames() {

@@ -1,5 +1,6 @@
-// `dala run` writes report.html (and, with --video, the frames video); `dala view` writes it again from the run's folder, or from a
-// saved map alone, and prints where; a folder that is no run is an error that says so.
+// `dala run` writes report.html (and, with --video, the frames video); `dala view` writes it again
+// from the run's folder, or from a saved map alone, and prints where; a folder that is no run is an
+// error that says so.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -32,12 +33,13 @@ TEST(ViewCli, WritesTheReportOfARunAndOfASavedMap) {
   sim.seed = 5;
   sim::WriteSyntheticDataset(sim, dir / "seq", false);
   ASSERT_EQ(Dala("run " + (dir / "seq") + " --out " + (dir / "run") + " --progress=false " +
-                 "--video " + (dir / "run/frames.mp4"),
+                     "--video " + (dir / "run/frames.mp4"),
                  dir),
             0)
       << ReadAll(dir / "err.txt");
-  EXPECT_NE(ReadAll(dir / "out.txt").find("video       " + (dir / "run/frames.mp4") + " (30 frames"),
-            std::string::npos)
+  EXPECT_NE(
+      ReadAll(dir / "out.txt").find("video       " + (dir / "run/frames.mp4") + " (30 frames"),
+      std::string::npos)
       << ReadAll(dir / "out.txt");
   EXPECT_NE(ReadAll(dir / "out.txt").find("report      " + (dir / "run") + "/report.html"),
             std::string::npos)
