@@ -619,6 +619,8 @@ int RunRun(const std::vector<std::string>& args) {
   const nlohmann::json report = {
       {"dataset",
        {{"path", args[0]},
+        // The same, absolute: where `dala view` finds the ground truth from another folder.
+        {"absolute_path", std::filesystem::absolute(args[0]).lexically_normal().string()},
         {"format", DatasetFormatName(dataset->format())},
         {"frames", dataset->size()},
         {"stereo", dataset->is_stereo()}}},

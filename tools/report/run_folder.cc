@@ -63,7 +63,9 @@ ReportInput ReportInputFromRunFolder(const std::string& dir, std::string* note) 
     DatasetOptions options;
     options.format = ParseDatasetFormat(report["dataset"].value("format", std::string("auto")));
     options.allow_missing_images = true;
-    const std::unique_ptr<Dataset> dataset = OpenDataset(input.title, options);
+    // The absolute path when report.json has it (the run may have been given a relative one).
+    const std::string dataset_path = report["dataset"].value("absolute_path", input.title);
+    const std::unique_ptr<Dataset> dataset = OpenDataset(dataset_path, options);
     const PinholeCamera& camera = dataset->rig().left;
     if (camera.width > 0 && camera.height > 0) {
       input.image_aspect = static_cast<double>(camera.width) / camera.height;
@@ -76,7 +78,8 @@ ReportInput ReportInputFromRunFolder(const std::string& dir, std::string* note) 
       input.evaluation = Evaluate(*input.ground_truth, input.trajectory, eval);
     }
   } catch (const Error& e) {
-    *note = "no ground truth shown: the dataset " + input.title + " could not be opened again (" +
+    *note = "no ground truth shown: the dataset " +
+            report["dataset"].value("absolute_path", input.title) + " could not be opened again (" +
             e.what() + ")";
   }
   return input;

@@ -11,7 +11,7 @@
 namespace dala::report {
 
 // A `dala run` output folder: trajectory.txt, report.json (frames, summary, the printed summary,
-// the dataset's path and format, the mode) and map.dmap's landmarks. The ground truth comes from
+// the dataset's path (absolute_path when present) and format, the mode) and map.dmap's landmarks. The ground truth comes from
 // the dataset named in report.json, opened again with its format, and is evaluated as `dala run`
 // does (SE(3), Sim(3) for mono); when the dataset cannot be opened (moved, or it needs
 // --calibration), the report goes without ground truth and `*note` says why (empty otherwise).

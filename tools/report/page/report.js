@@ -78,13 +78,27 @@
   const tEnd = Math.max(pathT.length ? pathT[pathT.length - 1] : 0,
                         charts.t.length ? charts.t[charts.t.length - 1] : 0);
 
-  // The scene's extent: the paths and keyframes (points may hold far outliers), else the points.
+  // The scene's extent: the paths, the keyframes and the bulk of the map (each axis between its
+  // 10th and 90th percentile: a map may hold far outliers).
   const box = new THREE.Box3();
   for (const p of path) box.expandByPoint(p);
   for (const p of gt) box.expandByPoint(p);
   for (const p of keyframes) box.expandByPoint(p);
   const pointsFlat = data.points.xyz;
-  if (box.isEmpty() && pointsFlat.length) {
+  if (pointsFlat.length >= 30) {
+    const n = pointsFlat.length / 3;
+    const step = Math.max(1, Math.floor(n / 20000));
+    const lo = [], hi = [];
+    for (let c = 0; c < 3; ++c) {
+      const values = [];
+      for (let i = 0; i < n; i += step) values.push(pointsFlat[3 * i + c]);
+      values.sort(function (a, b) { return a - b; });
+      lo.push(values[Math.floor(0.1 * (values.length - 1))]);
+      hi.push(values[Math.floor(0.9 * (values.length - 1))]);
+    }
+    box.expandByPoint(new THREE.Vector3().fromArray(lo));
+    box.expandByPoint(new THREE.Vector3().fromArray(hi));
+  } else {
     for (let i = 0; i + 2 < pointsFlat.length; i += 3) {
       box.expandByPoint(new THREE.Vector3(pointsFlat[i], pointsFlat[i + 1], pointsFlat[i + 2]));
     }
