@@ -114,6 +114,7 @@ TrackResult System::Track(const Frame& frame) {
   s.landmarks = e.landmarks_in_state;
   s.loop = m.loop.has_value();
   s.loop_closed = e.loop_closed;
+  if (m.loop) s.loop_old_frame = m.loop->old_frame;
   s.frontend = m.timings;
   s.estimator_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
   s.total_ms = std::chrono::duration<double, std::milli>(t2 - t0).count();
@@ -130,6 +131,7 @@ TrackResult System::Track(const Frame& frame) {
   r.T_w_c = e.T_w_c;
   r.valid = e.valid;
   r.keyframe = m.is_keyframe;
+  last_measurement_ = std::move(m);
   return r;
 }
 

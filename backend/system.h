@@ -57,6 +57,8 @@ struct FrameStats {
   int landmarks = 0;         // In the estimator's state.
   bool loop = false;         // The frontend recognised a place (measurement.loop).
   bool loop_closed = false;  // The estimator corrected the trajectory with it.
+  // The old keyframe's frame of the place recognised (measurement.loop->old_frame), when loop.
+  std::optional<FrameId> loop_old_frame;
   std::string note;  // The estimator's word on this frame ("initialising: <reason>"), if any.
   FrontendTimings frontend;
   double estimator_ms = 0;
@@ -104,6 +106,10 @@ class System {
   // patch descriptor (frontend/harris.h).
   std::vector<SavedKeyframe> keyframes() const;
   const std::vector<FrameStats>& stats() const { return stats_; }
+  // The frontend's measurement of the last frame tracked (empty before the first): what it
+  // detected, tracked and matched in stereo (`dala run --video` draws it). A skipped frame
+  // leaves it as it was.
+  const FrameMeasurement& last_measurement() const { return last_measurement_; }
   // Places the place recognition stores (one per keyframe, but one per place on revisits).
   size_t places() const { return frontend_->place_recognition().database().size(); }
 
@@ -150,6 +156,7 @@ class System {
   std::unique_ptr<Frontend> frontend_;
   std::unique_ptr<Estimator> estimator_;
   std::vector<FrameStats> stats_;
+  FrameMeasurement last_measurement_;
   std::optional<Pose> T_w_odom_prev_;  // The previous frame's odometry pose, if it had one.
   bool odometry_given_ = false;        // A measurement carried odometry to the estimator.
   bool local_map_handed_ = false;      // The estimator gave the frontend a local map once.

@@ -6,7 +6,11 @@
 #                                    single-node Slurm for the bench job array test
 #                                    (tests/tools/bench/slurm_bench_test.cc), opencv-doc for
 #                                    its chessboard images (tests/tools/calibrate_cli_test.cc),
-#                                    python3 for the check of docs/reliability.md's bounds
+#                                    python3 for the check of docs/reliability.md's bounds,
+#                                    chromium (and fonts-liberation, its recommended fonts,
+#                                    which --no-install-recommends leaves out) for the
+#                                    headless-browser test of report.html
+#                                    (tests/tools/report/report_browser_test.cc)
 set -euo pipefail
 case "${1:-}" in
   "")
@@ -16,7 +20,7 @@ case "${1:-}" in
       nlohmann-json3-dev librosbag-dev libsensor-msgs-dev)
     WHAT="packages" ;;
   --test)
-    PACKAGES=(slurm-wlm munge opencv-doc python3)
+    PACKAGES=(slurm-wlm munge opencv-doc python3 chromium fonts-liberation)
     WHAT="test packages" ;;
   *)
     echo "usage: $0 [--test]" >&2; exit 2 ;;

@@ -26,6 +26,9 @@
 #include "tools/bench/line_chart.h"
 #include "tools/command.h"
 #include "tools/process_memory.h"
+#include "tools/report/frame_video.h"
+#include "tools/report/report_data.h"
+#include "tools/report/report_html.h"
 #include "tools/stop_signal.h"
 
 DECLARE_string(out);  // tools/common_flags.cc
@@ -55,6 +58,11 @@ DEFINE_bool(progress, true, "run: show progress on stderr");
 DEFINE_bool(strict, false,
             "run: stop with an error (exit 2) at a missing, unreadable or wrongly sized image "
             "instead of skipping its frame");
+
+DEFINE_string(video, "",
+              "run: also write FILE.mp4, a video of what the frontend saw: each frame with its "
+              "tracked points by track age, stereo matches, state, keyframe flag and the path so "
+              "far from above (docs/pipeline.md; off when empty)");
 
 DEFINE_string(map, "",
               "run: start in the saved map FILE (the map.dmap of an earlier run): frames are "
@@ -133,6 +141,9 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"landmarks", s.landmarks},
           {"loop", s.loop},
           {"loop_closed", s.loop_closed},
+          // The old keyframe's frame of the place recognised (null: no loop).
+          {"loop_old_frame", s.loop_old_frame ? nlohmann::json(s.loop_old_frame->value)
+                                              : nlohmann::json(nullptr)},
           {"note", s.note},
           {"ms",
            {{"detect", s.frontend.detect_ms},
@@ -206,7 +217,8 @@ struct FramesRun {
   std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
 };
 
-FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& stop) {
+FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& stop,
+                          report::FrameVideo* video) {
   FramesRun run;
   Progress progress(dataset->size(), FLAGS_progress);
   const auto start = std::chrono::steady_clock::now();
@@ -217,6 +229,10 @@ FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& st
     try {
       if (!dataset->Next(&frame)) break;
       last = system->Track(frame);
+      if (video != nullptr) {
+        video->Add(frame.left, system->last_measurement(), system->stats().back(),
+                   last.valid ? std::optional<Pose>(last.T_w_c) : std::nullopt);
+      }
     } catch (const FrameError& e) {
       if (FLAGS_strict) throw;
       if (system->stats().empty()) {
@@ -391,67 +407,65 @@ void DrawMemoryChart(const std::vector<FrameStats>& stats, const std::vector<dou
   bench::DrawStackedLineCharts({{counts, top}, {{rss_curve}, bottom}}, png_path);
 }
 
-// The summary `dala run` prints.
+// The summary `dala run` prints (and report.html shows).
 void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::json& summary,
                   const RefinementSummary& refinement, size_t frames_with_pose,
                   int64_t localised_at, const std::string& evaluation_error, bool plotted,
-                  const std::string& dir, const SystemOptions& options) {
+                  const std::string& dir, const SystemOptions& options, std::ostream& out) {
   const size_t frames = system.stats().size();
   const int keyframes = c.keyframes;
-  std::cout << "frames      " << frames << " (" << c.failures << " lost"
-            << (c.skipped > 0 ? " of which " + std::to_string(c.skipped) + " skipped" : "") << ", "
-            << c.initialising << " initialising, " << frames_with_pose << " with a pose, "
-            << keyframes << " keyframes, " << c.loops << " loops detected, " << c.loops_closed
-            << " closed)\n"
-            << "scale       " << system.ScaleDescription() << "\n";
+  out << "frames      " << frames << " (" << c.failures << " lost"
+      << (c.skipped > 0 ? " of which " + std::to_string(c.skipped) + " skipped" : "") << ", "
+      << c.initialising << " initialising, " << frames_with_pose << " with a pose, " << keyframes
+      << " keyframes, " << c.loops << " loops detected, " << c.loops_closed << " closed)\n"
+      << "scale       " << system.ScaleDescription() << "\n";
   if (const std::string note = system.estimator().DisparityOffsetNote(); !note.empty()) {
-    std::cout << "disparity   offset " << note << "\n";
+    out << "disparity   offset " << note << "\n";
   }
   if (!FLAGS_map.empty()) {
-    std::cout << "saved map   " << FLAGS_map << ": "
-              << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)
-                                    : std::string("never localised (no frame recognised a "
-                                                  "mapped place; no frame has a pose)"))
-              << "\n";
+    out << "saved map   " << FLAGS_map << ": "
+        << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)
+                              : std::string("never localised (no frame recognised a "
+                                            "mapped place; no frame has a pose)"))
+        << "\n";
   }
-  std::cout << "memory      " << std::fixed << std::setprecision(0)
-            << summary["peak_rss_mb"].get<double>() << " MiB peak resident, " << keyframes
-            << " keyframes made"
-            << (c.keyframes_in_map >= 0 ? ", " + std::to_string(c.keyframes_in_map) + " in the map"
-                                        : std::string())
-            << ", " << system.places() << " places stored (memory.png)\n";
-  std::cout << "time        " << std::fixed << std::setprecision(1) << Percentile(c.total_ms, 0.5)
-            << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
+  out << "memory      " << std::fixed << std::setprecision(0)
+      << summary["peak_rss_mb"].get<double>() << " MiB peak resident, " << keyframes
+      << " keyframes made"
+      << (c.keyframes_in_map >= 0 ? ", " + std::to_string(c.keyframes_in_map) + " in the map"
+                                  : std::string())
+      << ", " << system.places() << " places stored (memory.png)\n";
+  out << "time        " << std::fixed << std::setprecision(1) << Percentile(c.total_ms, 0.5)
+      << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
   if (summary.contains("ate")) {
-    std::cout << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>()
-              << " m (" << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
-              << (refinement.done ? ", after the global BA" : "") << ")\n";
+    out << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>() << " m ("
+        << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
+        << (refinement.done ? ", after the global BA" : "") << ")\n";
     if (summary.contains("online") && summary["online"].contains("ate")) {
-      std::cout << "ATE online  " << std::setprecision(4)
-                << summary["online"]["ate"]["rmse"].get<double>()
-                << " m (before the global BA: trajectory_online.txt)\n";
+      out << "ATE online  " << std::setprecision(4)
+          << summary["online"]["ate"]["rmse"].get<double>()
+          << " m (before the global BA: trajectory_online.txt)\n";
     }
-    for (const auto& w : summary["warnings"])
-      std::cout << "note        " << w.get<std::string>() << "\n";
+    for (const auto& w : summary["warnings"]) out << "note        " << w.get<std::string>() << "\n";
   }
-  if (!evaluation_error.empty()) std::cout << "evaluation  not done: " << evaluation_error << "\n";
+  if (!evaluation_error.empty()) out << "evaluation  not done: " << evaluation_error << "\n";
   if (frames_with_pose < frames) {
-    std::cout << "note        " << frames - frames_with_pose
-              << " frames have no pose (skipped, or before the monocular initialisation): "
-                 "trajectory files leave them out; pair trajectory_kitti.txt with ground truth "
-                 "by time (trajectory.txt)\n";
+    out << "note        " << frames - frames_with_pose
+        << " frames have no pose (skipped, or before the monocular initialisation): "
+           "trajectory files leave them out; pair trajectory_kitti.txt with ground truth "
+           "by time (trajectory.txt)\n";
   }
-  std::cout << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
-            << "map.dmap, report.json, memory.png" << (plotted ? ", trajectory.png" : "")
-            << (refinement.done ? ", trajectory_online.txt" : "")
-            << ")\n";
+  out << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
+      << "map.dmap, report.json, report.html, memory.png" << (plotted ? ", trajectory.png" : "")
+      << (refinement.done ? ", trajectory_online.txt" : "") << ")\n";
 }
 
 // trajectory.txt (TUM), trajectory_online.txt (before the refinement, when there was one),
-// trajectory_kitti.txt, map.ply and map.dmap; returns the number of landmarks written.
-size_t WriteTrajectoryAndMap(const System& system, const Trajectory& trajectory,
-                             const Trajectory& online_trajectory, bool refined,
-                             const std::string& dir) {
+// trajectory_kitti.txt, map.ply and map.dmap; returns the map's points (report.html shows them).
+std::vector<Eigen::Vector3d> WriteTrajectoryAndMap(const System& system,
+                                                   const Trajectory& trajectory,
+                                                   const Trajectory& online_trajectory,
+                                                   bool refined, const std::string& dir) {
   WriteTrajectoryTum(dir + "/trajectory.txt", trajectory);
   if (refined) WriteTrajectoryTum(dir + "/trajectory_online.txt", online_trajectory);
   WriteTrajectoryKitti(dir + "/trajectory_kitti.txt", trajectory);
@@ -463,7 +477,7 @@ size_t WriteTrajectoryAndMap(const System& system, const Trajectory& trajectory,
   }
   WritePly(dir + "/map.ply", points, nullptr, &ids);
   system.SaveMap(dir + "/map.dmap");
-  return points.size();
+  return points;
 }
 
 // The evaluation against the dataset's ground truth, when it has one, into the summary (SE(3)
@@ -471,6 +485,7 @@ size_t WriteTrajectoryAndMap(const System& system, const Trajectory& trajectory,
 struct RunEvaluation {
   bool plotted = false;
   std::string error;  // Why the evaluation could not be done (empty: done, or no ground truth).
+  std::optional<EvalResult> result;  // The evaluation (report.html); none without ground truth.
 };
 
 RunEvaluation EvaluateRun(const Dataset& dataset, const Trajectory& trajectory,
@@ -482,7 +497,8 @@ RunEvaluation EvaluateRun(const Dataset& dataset, const Trajectory& trajectory,
   if (!gt || gt->empty()) return out;
   EvalOptions eval;
   eval.alignment = options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
-  const EvalResult result = Evaluate(*gt, trajectory, eval);
+  out.result = Evaluate(*gt, trajectory, eval);
+  const EvalResult& result = *out.result;
   const nlohmann::json e = EvalResultToJson(result);
   for (const auto& [key, value] : e.items()) (*summary)[key] = value;
   if (refined) {
@@ -499,11 +515,40 @@ RunEvaluation EvaluateRun(const Dataset& dataset, const Trajectory& trajectory,
   return out;
 }
 
+// report.html (tools/report): the run's map, keyframes, path and ground truth in 3D, its
+// per-frame charts and the printed summary, from the results just written (never the
+// estimator's state). Returns the time it took, in milliseconds.
+double WriteReport(const Dataset& dataset, const Trajectory& trajectory,
+                   const std::optional<EvalResult>& evaluation,
+                   std::vector<Eigen::Vector3d> map_points, const nlohmann::json& report,
+                   const std::string& dir) {
+  const auto start = std::chrono::steady_clock::now();
+  report::ReportInput input;
+  input.title = report["dataset"]["path"].get<std::string>();
+  input.trajectory = trajectory;
+  if (evaluation && dataset.ground_truth()) {
+    input.ground_truth = dataset.ground_truth();
+    input.evaluation = evaluation;
+  }
+  input.points_w = std::move(map_points);
+  input.keyframes = report::KeyframesFromFrames(report["frames"], trajectory);
+  input.frames = report["frames"];
+  input.summary = report["summary"];
+  input.summary_text = report["summary_text"].get<std::string>();
+  const PinholeCamera& camera = dataset.rig().left;
+  if (camera.width > 0 && camera.height > 0) {
+    input.image_aspect = static_cast<double>(camera.width) / camera.height;
+  }
+  report::WriteReportHtml(dir + "/report.html", report::ReportDataJson(input));
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
 int RunRun(const std::vector<std::string>& args) {
   const SystemOptions options = OptionsFromFlags();
   if (FLAGS_dump_config || FLAGS_dump_config_all) {
-    std::cout << SystemOptionsToYaml(options, FLAGS_dump_config_all ? OptionSet::kAll
-                                                                    : OptionSet::kUser);
+    std::cout << SystemOptionsToYaml(options,
+                                     FLAGS_dump_config_all ? OptionSet::kAll : OptionSet::kUser);
     return 0;
   }
   if (args.size() != 1) {
@@ -529,7 +574,10 @@ int RunRun(const std::vector<std::string>& args) {
   std::cerr << "[run] " << args[0] << " (" << DatasetFormatName(dataset->format()) << ", "
             << dataset->size() << " frames, " << (dataset->is_stereo() ? "stereo" : "mono")
             << ") with " << options.estimator << "/" << options.mode << "\n";
-  const FramesRun run = TrackEveryFrame(dataset.get(), &system, stop);
+  // --video: what the frontend saw, frame by frame.
+  std::optional<report::FrameVideo> video;
+  if (!FLAGS_video.empty()) video.emplace(FLAGS_video);
+  const FramesRun run = TrackEveryFrame(dataset.get(), &system, stop, video ? &*video : nullptr);
   // The causal (online) trajectory, then the global refinement of the whole run.
   const Trajectory online_trajectory = system.trajectory();
   const RefinementSummary refinement = Refine(&system, run, options);
@@ -537,8 +585,9 @@ int RunRun(const std::vector<std::string>& args) {
   // Outputs: each file is written to a temporary and renamed, so none is ever half written.
   const std::string dir = FLAGS_out;
   const Trajectory trajectory = system.trajectory();
-  const size_t landmarks =
+  std::vector<Eigen::Vector3d> map_points =
       WriteTrajectoryAndMap(system, trajectory, online_trajectory, refinement.done, dir);
+  const size_t landmarks = map_points.size();
 
   const auto& stats = system.stats();
   const FrameCounts counts = CountFrames(stats);
@@ -564,9 +613,14 @@ int RunRun(const std::vector<std::string>& args) {
   }
   summary["peak_rss_mb"] = PeakResidentMemoryMb();
   DrawMemoryChart(stats, run.rss_mb, dir + "/memory.png");
+  std::ostringstream printed;
+  PrintSummary(system, counts, summary, refinement, trajectory.size(), localised_at,
+               evaluation.error, evaluation.plotted, dir, options, printed);
   const nlohmann::json report = {
       {"dataset",
        {{"path", args[0]},
+        // The same, absolute: where `dala view` finds the ground truth from another folder.
+        {"absolute_path", std::filesystem::absolute(args[0]).lexically_normal().string()},
         {"format", DatasetFormatName(dataset->format())},
         {"frames", dataset->size()},
         {"stereo", dataset->is_stereo()}}},
@@ -574,11 +628,24 @@ int RunRun(const std::vector<std::string>& args) {
       {"mode", options.mode},
       {"options", SystemOptionsToJson(options)},
       {"frames", frames},
-      {"summary", summary}};
+      {"summary", summary},
+      // What `dala run` printed (report.html and `dala view` show it).
+      {"summary_text", printed.str()}};
   WriteFileAtomically(dir + "/report.json", [&](std::ostream& os) { os << report.dump(1) << "\n"; });
+  const double report_ms = WriteReport(*dataset, trajectory, evaluation.result,
+                                       std::move(map_points), report, dir);
 
-  PrintSummary(system, counts, summary, refinement, trajectory.size(), localised_at,
-               evaluation.error, evaluation.plotted, dir, options);
+  std::cout << printed.str();
+  if (video) {
+    const int video_frames = video->frames();
+    const double video_ms = video->ms_per_frame();
+    const std::string video_path = video->Close();
+    std::cout << "video       " << video_path << " (" << video_frames << " frames, "
+              << std::fixed << std::setprecision(1) << video_ms << " ms per frame to draw and "
+              << "encode)\n";
+  }
+  std::cout << "report      " << dir << "/report.html (3D view, charts; written in " << std::fixed
+            << std::setprecision(0) << report_ms << " ms)\n";
   if (run.signal != 0) {
     std::cerr << "[run] interrupted by " << StopSignalName(run.signal) << ": the results cover the "
               << run.done << " frames done of " << dataset->size() << " (report.json: "
@@ -593,7 +660,7 @@ const CommandRegistrar kRegistrar(
      "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
      "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
      "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-     "         [--map FILE] [--dump_config | --dump_config_all]\n"
+     "         [--map FILE] [--video FILE.mp4] [--dump_config | --dump_config_all]\n"
      "       dala run VIDEO|IMAGE_FOLDER --calibration FILE --out DIR [--mode mono]\n"
      "         [--fps HZ] [--times FILE] [--right_folder DIR] [--stereo_layout side_by_side]\n"
      "         [--ground_truth FILE]\n"
@@ -605,8 +672,10 @@ const CommandRegistrar kRegistrar(
      "writes into DIR: trajectory.txt (TUM, every frame with a pose), trajectory_kitti.txt,\n"
      "map.ply, map.dmap (keyframes, landmarks, descriptors; docs/api.md), report.json (options,\n"
      "per-frame timings and counts, summary with ATE/RPE/KITTI errors when the dataset has\n"
-     "ground truth), trajectory.png (estimate over ground truth) and memory.png (keyframes\n"
-     "and resident memory against frames; report.json has each frame's rss_mb).\n\n"
+     "ground truth), trajectory.png (estimate over ground truth), memory.png (keyframes\n"
+     "and resident memory against frames; report.json has each frame's rss_mb) and\n"
+     "report.html (the run in 3D with its charts and summary, one file that opens from disk;\n"
+     "`dala view DIR` writes it again). --video FILE.mp4 also writes what the frontend saw.\n\n"
      "--set ba.final_ba=always (or after_loop: when the run closed a loop) refines the whole run\n"
      "after its last frame by a global bundle adjustment over every keyframe (BA estimator; by\n"
      "default only for a stereo rig whose disparity offset was calibrated, with the offset free:\n"

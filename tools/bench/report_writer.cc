@@ -507,7 +507,7 @@ std::string HtmlSequenceRuns(const Grid& g, const std::string& s,
         }
       }
       h += "<div class=\"small\">";
-      for (const char* file : {"log.txt", "report.json", "trajectory.txt"}) {
+      for (const char* file : {"report.html", "log.txt", "report.json", "trajectory.txt"}) {
         const std::string rel = r->run_dir + "/" + file;
         if (exists(rel)) h += "<a href=\"" + HtmlEscape(rel) + "\">" + file + "</a> ";
       }
@@ -570,11 +570,15 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
     if (std::string(c.key) != "error") columns.push_back(&c);
     if (std::string(c.key) == "status") columns.push_back(&Columns().back());
   }
-  h += "<h2>All runs</h2>\n<div class=\"scroll\"><table><tr>";
+  // Each row links to its run's report.html (`dala run`'s 3D view and charts), when written.
+  h += "<h2>All runs</h2>\n<div class=\"scroll\"><table><tr><th>run</th>";
   for (const Column* c : columns) h += "<th>" + HtmlEscape(c->title) + "</th>";
   h += "</tr>\n";
   for (const BenchRunResult& r : rows) {
     h += std::string("<tr") + (r.status == kStatusOk ? "" : " class=\"bad\"") + ">";
+    const std::string run_report = r.run_dir + "/report.html";
+    h += exists(run_report) ? "<td><a href=\"" + HtmlEscape(run_report) + "\">3D</a></td>"
+                            : std::string("<td></td>");
     for (const Column* column : columns) {
       const Column& c = *column;
       const std::string key = c.key;

@@ -10,7 +10,8 @@
 //   results.md    the spread table, the ATE of every run (when sequences have several),
 //                 side-by-side tables (sequences x configurations, medians over the runs) and
 //                 the full table
-//   report.html   static page: the tables and every plot (relative links, opens from disk)
+//   report.html   static page: the tables and every plot (relative links, opens from disk);
+//                 each run's row and card link the run's own report.html when it wrote one
 //   plots/SEQ_ate.png, plots/SEQ_time.png: all configurations of a sequence on one chart;
 //   plots/SEQ_ate_spread.png: the ATE of every run per configuration, for a sequence with
 //   several runs per configuration (seeds, start frames).

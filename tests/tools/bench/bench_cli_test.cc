@@ -25,6 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::ExpectSameBenchResults;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using testing::ReadAll;
 
 struct CliResult {
@@ -189,6 +190,10 @@ TEST_F(BenchCli, RecordsMetricsOfEveryRunAndItsFailures) {
   EXPECT_TRUE(pngs.count("runs/square_b/ekf-mono/eval.png"));
   EXPECT_TRUE(pngs.count("plots/square_a_ate.png"));
   EXPECT_THAT(html, HasSubstr("the fake estimator diverged"));
+  // Each run that wrote its report.html is linked from its row and its card.
+  EXPECT_THAT(html, HasSubstr("<td><a href=\"runs/square_a/ba-stereo/report.html\">3D</a></td>"));
+  EXPECT_THAT(html, HasSubstr("<a href=\"runs/square_b/ekf-mono/report.html\">report.html</a>"));
+  EXPECT_THAT(html, Not(HasSubstr("runs/square_a/fails/report.html")));
 }
 
 TEST_F(BenchCli, ResumesFinishedRunsAndForceRerunsThem) {

@@ -9,7 +9,7 @@
 //    --preset broken: exit 2 with a message.
 //  - run SEQ --out RUNDIR --estimator E --mode M [--first_frame F] [--set k=v]...:
 //    trajectory.txt (TUM) = ground truth of frames F.. with a known error, report.json with
-//    per-frame times 10 + (i % 10) ms; appends "run E M F" to RUNDIR/../../../run_calls.txt.
+//    per-frame times 10 + (i % 10) ms, a placeholder report.html; appends "run E M F" to RUNDIR/../../../run_calls.txt.
 //      stereo: z offset d * (+1, -1, -1, +1, ...) by frame index, d = 0.1 + 0.01 F m. Over blocks
 //        of 4 frames on one side of the square this offset is orthogonal to the path (sum s_i = 0
 //        and sum s_i p_i = 0), so for F a multiple of 4 the SE(3) alignment is the identity and
@@ -86,6 +86,7 @@ awk -v n=$n -v est=$est -v mode=$mode 'BEGIN {
     printf "%s{\"frame\": %d, \"t\": %.1f, \"status\": \"%s\", \"keyframe\": %s, \"features\": 500, \"landmarks\": 100, \"ms\": {\"frontend\": %.1f, \"estimator\": %.1f, \"total\": %.1f}}", (i ? ",\n  " : ""), i, i * 0.1, (i == 5 ? "lost" : "tracking"), (i % 5 == 0 ? "true" : "false"), t * 0.6, t * 0.4, t }
   printf "],\n \"summary\": {\"frames\": %d, \"fps\": 70.0, \"tracking_failures\": 1, \"keyframes\": 16, \"keyframes_in_map\": 12, \"disparity_offset_px\": 0.25, \"landmarks\": 4321, \"pairs\": %d}}\n", n, n }' > "$out/report.json.tmp"
 mv "$out/report.json.tmp" "$out/report.json"
+printf '<!DOCTYPE html><title>fake run report</title>\n' > "$out/report.html"
 exit 0
 )SCRIPT";
 
