@@ -14,6 +14,7 @@
 #include "core/io/atomic_file.h"
 #include "tools/bench/line_chart.h"
 #include "tools/bench/summary.h"
+#include "tools/html_escape.h"
 
 namespace dala::bench {
 namespace fs = std::filesystem;
@@ -81,29 +82,6 @@ std::string CsvField(const std::string& s) {
   std::string q = "\"";
   for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
   return q + "\"";
-}
-
-std::string HtmlEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 std::string MdEscape(const std::string& s) {
@@ -408,7 +386,7 @@ ul.failures { margin: 8px 0 16px 0; padding-left: 20px; } ul.failures li { margi
 )";
 
 std::string StatusSpan(const std::string& status) {
-  return "<span class=\"" + HtmlEscape(status) + "\">" + HtmlEscape(status) + "</span>";
+  return "<span class=\"" + EscapeHtml(status) + "\">" + EscapeHtml(status) + "</span>";
 }
 
 // A cell of a side-by-side table: the (median) value, or the status when no run is ok; the
@@ -421,7 +399,7 @@ std::string HtmlCell(const Cell& cell, const Metric& m, const std::optional<doub
     errors +=
         (errors.empty() ? "" : "\n") + (r->variant.empty() ? "" : r->variant + ": ") + r->error;
   }
-  const std::string title = errors.empty() ? "" : " title=\"" + HtmlEscape(errors) + "\"";
+  const std::string title = errors.empty() ? "" : " title=\"" + EscapeHtml(errors) + "\"";
   if (CountOk(cell) == 0) return "<td" + title + ">" + StatusSpan(CellStatus(cell)) + "</td>";
   const auto v = CellValue(cell, m);
   const std::string note = FailureNote(cell);
@@ -432,8 +410,8 @@ std::string HtmlCell(const Cell& cell, const Metric& m, const std::optional<doub
 
 std::string HtmlSpread(const std::vector<BenchRunResult>& rows) {
   std::string h = "<h2>" + std::string(kSpreadTitle) + "</h2>\n<p class=\"small\">" +
-                  HtmlEscape(kSpreadNote) + "</p>\n<table><tr>";
-  for (const SpreadColumn& c : SpreadColumns()) h += "<th>" + HtmlEscape(c.title) + "</th>";
+                  EscapeHtml(kSpreadNote) + "</p>\n<table><tr>";
+  for (const SpreadColumn& c : SpreadColumns()) h += "<th>" + EscapeHtml(c.title) + "</th>";
   h += "</tr>\n";
   for (const SpreadSummary& s : SummarizeAte(rows)) {
     h += std::string("<tr") + (s.ok < s.runs ? " class=\"bad\"" : "") + ">";
@@ -442,7 +420,7 @@ std::string HtmlSpread(const std::vector<BenchRunResult>& rows) {
       const std::string cls = key == "sequence" || key == "config" ? "name"
                               : key == "not_ok_runs"               ? "err"
                                                                    : "";
-      h += "<td" + (cls.empty() ? "" : " class=\"" + cls + "\"") + ">" + HtmlEscape(c.value(s)) +
+      h += "<td" + (cls.empty() ? "" : " class=\"" + cls + "\"") + ">" + EscapeHtml(c.value(s)) +
            "</td>";
     }
     h += "</tr>\n";
@@ -454,16 +432,16 @@ std::string HtmlPerVariant(const Grid& g, const std::vector<BenchRunResult>& row
   std::string h =
       "<h2>ATE RMSE [m] of every run</h2>\n<table><tr><th class=\"name\">sequence</th>"
       "<th class=\"name\">run</th>";
-  for (const std::string& c : g.configs) h += "<th>" + HtmlEscape(c) + "</th>";
+  for (const std::string& c : g.configs) h += "<th>" + EscapeHtml(c) + "</th>";
   h += "</tr>\n";
   for (const VariantRow& v : VariantRows(rows)) {
-    h += "<tr><td class=\"name\">" + HtmlEscape(v.sequence) + "</td><td class=\"name\">" +
-         HtmlEscape(VariantText(v.variant)) + "</td>";
+    h += "<tr><td class=\"name\">" + EscapeHtml(v.sequence) + "</td><td class=\"name\">" +
+         EscapeHtml(VariantText(v.variant)) + "</td>";
     for (const std::string& c : g.configs) {
       const BenchRunResult* r = RunOf(g, v, c);
       const bool ok = r == nullptr || r->status == kStatusOk;
-      h += "<td" + (ok ? std::string() : " title=\"" + HtmlEscape(r->error) + "\"") + ">" +
-           (ok ? HtmlEscape(RunAteText(r)) : StatusSpan(r->status)) + "</td>";
+      h += "<td" + (ok ? std::string() : " title=\"" + EscapeHtml(r->error) + "\"") + ">" +
+           (ok ? EscapeHtml(RunAteText(r)) : StatusSpan(r->status)) + "</td>";
     }
     h += "</tr>\n";
   }
@@ -484,9 +462,9 @@ std::string HtmlSequenceRuns(const Grid& g, const std::string& s,
     for (const BenchRunResult* r : g.At(s, c)) {
       if (r->status == kStatusOk) continue;
       const std::string log = r->run_dir + "/log.txt";
-      failures += "<li><b>" + HtmlEscape(RunLabel(*r)) + "</b> " + StatusSpan(r->status) +
-                  (exists(log) ? " (<a href=\"" + HtmlEscape(log) + "\">log</a>)" : "") +
-                  "<div class=\"err small\">" + HtmlEscape(r->error) + "</div></li>\n";
+      failures += "<li><b>" + EscapeHtml(RunLabel(*r)) + "</b> " + StatusSpan(r->status) +
+                  (exists(log) ? " (<a href=\"" + EscapeHtml(log) + "\">log</a>)" : "") +
+                  "<div class=\"err small\">" + EscapeHtml(r->error) + "</div></li>\n";
     }
   }
   if (!failures.empty()) h += "<ul class=\"failures\">\n" + failures + "</ul>\n";
@@ -494,22 +472,22 @@ std::string HtmlSequenceRuns(const Grid& g, const std::string& s,
   for (const std::string& c : g.configs) {
     for (const BenchRunResult* r : g.At(s, c)) {
       if (r->status != kStatusOk) continue;
-      h += "<div class=\"card\"><h3>" + HtmlEscape(RunLabel(*r)) + " &middot; " +
+      h += "<div class=\"card\"><h3>" + EscapeHtml(RunLabel(*r)) + " &middot; " +
            StatusSpan(r->status) + "</h3>\n";
       if (r->ate_rmse) {
         h += "<div class=\"small\">ATE " + Fixed(r->ate_rmse, 4) + " m &middot; RPE(1f) " +
              Fixed(r->rpe_trans, 4) + " m &middot; " + Fixed(r->ms_median, 1) + " ms median</div>";
       }
-      if (!r->error.empty()) h += "<div class=\"err small\">" + HtmlEscape(r->error) + "</div>";
+      if (!r->error.empty()) h += "<div class=\"err small\">" + EscapeHtml(r->error) + "</div>";
       for (const std::string* png : {&r->plot_trajectory, &r->plot_timing}) {
         if (exists(*png)) {
-          h += "<img src=\"" + HtmlEscape(*png) + "\" alt=\"" + HtmlEscape(*png) + "\">\n";
+          h += "<img src=\"" + EscapeHtml(*png) + "\" alt=\"" + EscapeHtml(*png) + "\">\n";
         }
       }
       h += "<div class=\"small\">";
       for (const char* file : {"report.html", "log.txt", "report.json", "trajectory.txt"}) {
         const std::string rel = r->run_dir + "/" + file;
-        if (exists(rel)) h += "<a href=\"" + HtmlEscape(rel) + "\">" + file + "</a> ";
+        if (exists(rel)) h += "<a href=\"" + EscapeHtml(rel) + "\">" + file + "</a> ";
       }
       h += "</div></div>\n";
     }
@@ -530,8 +508,8 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
       "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\">\n"
       "<title>dala bench results</title>\n<style>" +
       std::string(kCss) + "</style></head><body>\n";
-  h += "<h1>dala bench results</h1>\n<div class=\"meta\">suite <code>" + HtmlEscape(header.suite) +
-       "</code>" + (header.shard.empty() ? "" : ", shard " + HtmlEscape(header.shard)) +
+  h += "<h1>dala bench results</h1>\n<div class=\"meta\">suite <code>" + EscapeHtml(header.suite) +
+       "</code>" + (header.shard.empty() ? "" : ", shard " + EscapeHtml(header.shard)) +
        " &middot; " + std::to_string(rows.size()) + " of " + std::to_string(header.runs_total) +
        " runs, " + std::to_string(ok) + " ok";
   if (!header.merged_from.empty()) {
@@ -548,11 +526,11 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
     h += "<div><div class=\"metric\">" + std::string(m.title) +
          (g.has_variants ? ", median over the runs" : "") +
          "</div>\n<table><tr><th class=\"name\">sequence</th>";
-    for (const std::string& c : g.configs) h += "<th>" + HtmlEscape(c) + "</th>";
+    for (const std::string& c : g.configs) h += "<th>" + EscapeHtml(c) + "</th>";
     h += "</tr>\n";
     for (const std::string& s : g.sequences) {
       const std::optional<double> best = Best(g, s, m);
-      h += "<tr><td class=\"name\"><a href=\"#seq-" + HtmlEscape(s) + "\">" + HtmlEscape(s) +
+      h += "<tr><td class=\"name\"><a href=\"#seq-" + EscapeHtml(s) + "\">" + EscapeHtml(s) +
            "</a></td>";
       for (const std::string& c : g.configs) h += HtmlCell(g.At(s, c), m, best);
       h += "</tr>\n";
@@ -572,25 +550,25 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
   }
   // Each row links to its run's report.html (`dala run`'s 3D view and charts), when written.
   h += "<h2>All runs</h2>\n<div class=\"scroll\"><table><tr><th>run</th>";
-  for (const Column* c : columns) h += "<th>" + HtmlEscape(c->title) + "</th>";
+  for (const Column* c : columns) h += "<th>" + EscapeHtml(c->title) + "</th>";
   h += "</tr>\n";
   for (const BenchRunResult& r : rows) {
     h += std::string("<tr") + (r.status == kStatusOk ? "" : " class=\"bad\"") + ">";
     const std::string run_report = r.run_dir + "/report.html";
-    h += exists(run_report) ? "<td><a href=\"" + HtmlEscape(run_report) + "\">3D</a></td>"
+    h += exists(run_report) ? "<td><a href=\"" + EscapeHtml(run_report) + "\">3D</a></td>"
                             : std::string("<td></td>");
     for (const Column* column : columns) {
       const Column& c = *column;
       const std::string key = c.key;
       const std::string v = c.value(r);
       if (key == "sequence" || key == "config") {
-        h += "<td class=\"name\">" + HtmlEscape(v) + "</td>";
+        h += "<td class=\"name\">" + EscapeHtml(v) + "</td>";
       } else if (key == "status") {
         h += "<td>" + StatusSpan(v) + "</td>";
       } else if (key == "error") {
-        h += "<td class=\"err\">" + HtmlEscape(v) + "</td>";
+        h += "<td class=\"err\">" + EscapeHtml(v) + "</td>";
       } else {
-        h += "<td>" + HtmlEscape(v) + "</td>";
+        h += "<td>" + EscapeHtml(v) + "</td>";
       }
     }
     h += "</tr>\n";
@@ -599,13 +577,13 @@ std::string Html(const std::string& out_dir, const BenchHeader& header,
 
   // Per sequence: the comparison charts, then each run's plots.
   for (const std::string& s : g.sequences) {
-    h += "<h2 id=\"seq-" + HtmlEscape(s) + "\">" + HtmlEscape(s) +
+    h += "<h2 id=\"seq-" + EscapeHtml(s) + "\">" + EscapeHtml(s) +
          "</h2>\n<div class=\"cards compare\">";
     const auto pngs = sequence_pngs.find(s);
     for (size_t i = 0; pngs != sequence_pngs.end() && i < pngs->second.size(); ++i) {
       const std::string& png = pngs->second[i];
       if (exists(png)) {
-        h += "<div><img src=\"" + HtmlEscape(png) + "\" alt=\"" + HtmlEscape(png) + "\"></div>";
+        h += "<div><img src=\"" + EscapeHtml(png) + "\" alt=\"" + EscapeHtml(png) + "\"></div>";
       }
     }
     h += "</div>\n";

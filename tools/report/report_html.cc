@@ -1,6 +1,7 @@
 #include "tools/report/report_html.h"
 
 #include "core/io/atomic_file.h"
+#include "tools/html_escape.h"
 #include "tools/report/embedded_page.h"
 
 namespace dala::report {
@@ -24,28 +25,6 @@ std::string ScriptSafeJson(const nlohmann::json& data) {
   return out;
 }
 
-std::string EscapeHtml(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 }  // namespace
 
