@@ -19,6 +19,7 @@
 #include "core/eval/alignment.h"
 #include "core/eval/evaluate.h"
 #include "core/eval/plot.h"
+#include "core/eval/scale_along_path.h"
 #include "core/io/atomic_file.h"
 #include "core/io/dataset.h"
 #include "core/io/ply_writer.h"
@@ -446,6 +447,14 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
           << summary["online"]["ate"]["rmse"].get<double>()
           << " m (before the global BA: trajectory_online.txt)\n";
     }
+    if (summary.contains("scale_along_path") &&
+        !summary["scale_along_path"]["segments"].empty()) {
+      const nlohmann::json& sc = summary["scale_along_path"];
+      out << "scale along " << std::setprecision(3) << sc["min"].get<double>() << " to "
+          << sc["max"].get<double>() << " over " << sc["segments"].size() << " segments of "
+          << std::setprecision(1) << sc["segment_m"].get<double>()
+          << " m (the estimate's size against the truth's, after the alignment)\n";
+    }
     for (const auto& w : summary["warnings"]) out << "note        " << w.get<std::string>() << "\n";
   }
   if (!evaluation_error.empty()) out << "evaluation  not done: " << evaluation_error << "\n";
@@ -501,6 +510,7 @@ RunEvaluation EvaluateRun(const Dataset& dataset, const Trajectory& trajectory,
   const EvalResult& result = *out.result;
   const nlohmann::json e = EvalResultToJson(result);
   for (const auto& [key, value] : e.items()) (*summary)[key] = value;
+  if (result.ok) (*summary)["scale_along_path"] = ScaleAlongPathToJson(MeasureScaleAlongPath(result));
   if (refined) {
     // The same evaluation of the trajectory as it was before the refinement.
     (*summary)["online"] = EvalResultToJson(Evaluate(*gt, online_trajectory, eval));

@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "core/eval/alignment.h"
+#include "core/eval/scale_along_path.h"
 
 namespace dala::report {
 namespace {
@@ -141,17 +143,35 @@ nlohmann::json ReportDataJson(const ReportInput& input) {
     // The absolute error of each evaluated pose, against its time.
     const EvalResult& e = *input.evaluation;
     nlohmann::json t = nlohmann::json::array(), m = nlohmann::json::array();
-    for (size_t i = 0; i < e.pairs.size() && i < e.ate.translation_errors.size(); ++i) {
+    // The time of pair i, from the run's first pose (none for a KITTI row out of range).
+    const auto PairTime = [&](size_t i) -> std::optional<double> {
       int64_t t_ns = e.pairs.t_ns[i];
       if (e.pairs.by_index) {
         // KITTI files: the stamp is the estimate's row.
-        if (t_ns < 0 || static_cast<size_t>(t_ns) >= input.trajectory.size()) continue;
+        if (t_ns < 0 || static_cast<size_t>(t_ns) >= input.trajectory.size()) return std::nullopt;
         t_ns = input.trajectory.poses[t_ns].t_ns;
       }
-      t.push_back(Round(SecondsFromNs(t_ns) - t0_s, 1e-4));
+      return SecondsFromNs(t_ns) - t0_s;
+    };
+    for (size_t i = 0; i < e.pairs.size() && i < e.ate.translation_errors.size(); ++i) {
+      const std::optional<double> t_s = PairTime(i);
+      if (!t_s) continue;
+      t.push_back(Round(*t_s, 1e-4));
       m.push_back(Round(e.ate.translation_errors[i], 1e-4));
     }
     data["error"] = {{"t", std::move(t)}, {"m", std::move(m)}};
+    // The scale along the path (core/eval/scale_along_path.h), as a step per segment: the
+    // estimate's size against the truth's, in percent off (0: the run's scale).
+    nlohmann::json st = nlohmann::json::array(), sp = nlohmann::json::array();
+    for (const ScaleSegment& seg : MeasureScaleAlongPath(e).segments) {
+      for (const size_t pair : {seg.first_pair, seg.last_pair}) {
+        const std::optional<double> t_s = PairTime(pair);
+        if (!t_s) continue;
+        st.push_back(Round(*t_s, 1e-4));
+        sp.push_back(Round(100.0 * (seg.relative_scale - 1.0), 1e-3));
+      }
+    }
+    if (!st.empty()) data["scale"] = {{"t", std::move(st)}, {"percent", std::move(sp)}};
   }
   // Keyframes.
   {

@@ -54,6 +54,7 @@ struct ReportInput {
 // "total"}, "path": {"t", "frame", "xyz", "q"}, "ground_truth": {"xyz"}, "keyframes": {"frame",
 // "xyz", "q"}, "loops": [{"frame", "old_frame", "closed", "a", "b"}], "lost": {"frame", "xyz"},
 // "relocalised": {"frame", "xyz"}, "charts": {...per frame...}, "error": {"t", "frame", "m"},
+// "scale": {"t", "percent"} (core/eval/scale_along_path.h: two points per segment),
 // "summary", "summary_text", "aspect"}; positions rounded to the millimetre, orientations
 // (quaternions x y z w) to 1e-4.
 nlohmann::json ReportDataJson(const ReportInput& input);

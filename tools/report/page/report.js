@@ -304,12 +304,19 @@
     const ctx = canvas.getContext('2d');
     ctx.clearRect(0, 0, w, h);
     const left = 44, right = 8, top = 8, bottom = 20;
-    let yMax = 0;
-    for (const s of spec.series) for (const v of s.y) if (v > yMax && isFinite(v)) yMax = v;
-    if (yMax <= 0) yMax = 1;
+    // From 0 up, or (spec.signed) over the values' range, 0 included.
+    let yMax = 0, yMin = 0;
+    for (const s of spec.series) {
+      for (const v of s.y) {
+        if (!isFinite(v)) continue;
+        if (v > yMax) yMax = v;
+        if (spec.signed && v < yMin) yMin = v;
+      }
+    }
+    if (yMax - yMin <= 0) yMax = yMin + 1;
     const xMax = Math.max(tEnd, 1e-9);
     const X = function (t) { return left + (w - left - right) * t / xMax; };
-    const Y = function (v) { return h - bottom - (h - top - bottom) * v / yMax; };
+    const Y = function (v) { return h - bottom - (h - top - bottom) * (v - yMin) / (yMax - yMin); };
     ctx.strokeStyle = '#999';
     ctx.beginPath();
     ctx.moveTo(left, top);
@@ -319,7 +326,14 @@
     ctx.fillStyle = '#555';
     ctx.font = '10px sans-serif';
     ctx.fillText(yMax.toPrecision(3), 2, top + 8);
-    ctx.fillText('0', 2, h - bottom);
+    ctx.fillText(yMin === 0 ? '0' : yMin.toPrecision(3), 2, h - bottom);
+    if (yMin < 0) {
+      ctx.strokeStyle = '#ccc';
+      ctx.beginPath();
+      ctx.moveTo(left, Y(0));
+      ctx.lineTo(w - right, Y(0));
+      ctx.stroke();
+    }
     ctx.fillText('0 s', left, h - 6);
     ctx.fillText(xMax.toFixed(1) + ' s', w - right - 40, h - 6);
     if (spec.bands) {
@@ -388,6 +402,14 @@
                                    'Absolute position error of each pose after the alignment (ATE).'),
                      spec: {series: [{x: data.error.t, y: data.error.m, colour: '#9467bd',
                                       label: 'position error'}]}});
+    if (data.scale) {
+      chartViews.push({canvas: chart('Scale along the path (%)',
+                                     'Each segment of the path aligned on its own (Sim(3)): its size ' +
+                                     'against the truth\'s, in percent off the run\'s scale. A drifting ' +
+                                     'scale shows as steps.'),
+                       spec: {signed: true, series: [{x: data.scale.t, y: data.scale.percent,
+                                                      colour: '#17becf', label: 'scale off (%)'}]}});
+    }
   } else {
     el('h2', {}, side, 'Error along the path');
     el('div', {class: 'note'}, side, 'No ground truth: no error to show.');
