@@ -11,6 +11,9 @@
 // - The mono EKF from the left images only (constant velocity, no odometry): Sim(3) ATE
 //   0.474 m, RPE 0.114 m (Sim(3)-scaled); the ATE bound is the target, 0.5 m (1.5x
 //   would be looser), the RPE's 1.5x.
+// - The BA from the left images only (one camera, Sim(3)): ATE 0.0311 m (docs/monocular.md),
+//   and the scale along the path (each tenth of it aligned on its own,
+//   core/eval/scale_along_path.h): 0.990 to 1.006, a spread max / min - 1 of 0.0163; bounds 1.5x.
 // The path (60 m) is shorter than KITTI's shortest segment (100 m): no segment errors here.
 #include <gtest/gtest.h>
 
@@ -91,6 +94,26 @@ TEST(KittiStereoE2e, StereoEkfWithinOnePointFiveTimesTheDocumentedValue) {
   EXPECT_EQ(s["tracking_failures"].get<int>(), 0);
   testing::ExpectWithinBound("ekf/stereo real KITTI 06 0-50, ATE", ate, 0.1946, "m");
   testing::ExpectWithinBound("ekf/stereo real KITTI 06 0-50, RPE 1 frame", rpe, 0.0170, "m");
+}
+
+TEST(KittiMonoE2e, BaFromTheLeftImagesKeepsItsScaleAlongThePath) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+  const std::string out = ::testing::TempDir() + "/dala_kitti_ba_mono";
+  const nlohmann::json report = RunKitti("--mode mono", out);
+  ASSERT_FALSE(report.is_discarded()) << "no report.json in " << out;
+  const nlohmann::json& s = report["summary"];
+  const double ate = s["ate"]["rmse"].get<double>();
+  ASSERT_TRUE(s.contains("scale_along_path")) << s.dump();
+  const nlohmann::json& scale = s["scale_along_path"];
+  ASSERT_EQ(scale["segments"].size(), 10u) << scale.dump();
+  const double spread = scale["max"].get<double>() / scale["min"].get<double>() - 1.0;
+  std::cout << "[ measured ] ba/mono KITTI 06 0-50: Sim(3) ATE " << ate << " m, scale along the "
+            << "path " << scale["min"] << " to " << scale["max"] << std::endl;
+  testing::ExpectWithinBound("ba/mono one camera real KITTI 06 0-50 from frame 0, ATE", ate,
+                             0.0311, "m");
+  testing::ExpectWithinBound(
+      "ba/mono one camera real KITTI 06 0-50, scale spread along the path", spread, 0.0163,
+      "(max / min - 1)");
 }
 
 TEST(KittiStereoE2e, MonoEkfFromTheLeftImagesDoesNotCollapse) {
