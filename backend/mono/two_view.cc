@@ -95,6 +95,7 @@ struct Reconstruction {
   Pose T_cur_ref = Pose::Identity();
   std::vector<std::optional<Eigen::Vector3d>> p_ref;
   int num_good = 0;
+  int num_consistent = 0;  // In front of both cameras and reprojecting within 2 sigma.
   double median_parallax_deg = 0.0;  // Of the points in front and consistent (any parallax).
   int cells = 0;
 };
@@ -148,6 +149,7 @@ Reconstruction Reconstruct(const PinholeCamera& camera, const Eigen::Matrix3d& R
         std::clamp(p.normalized().dot((p - O2).normalized()), -1.0, 1.0);
     const double angle = std::acos(cos_parallax);
     parallax.push_back(angle);
+    ++rec.num_consistent;
     if (angle < min_point_parallax) continue;
     rec.p_ref[i] = p;
     ++rec.num_good;
@@ -267,7 +269,7 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
     result.model = TwoViewModel::kHomography;
     std::vector<cv::Mat> Rs, ts, normals;
     cv::decomposeHomographyMat(H_cv, K_cv, Rs, ts, normals);
-    int second_good = 0;
+    int second_consistent = 0;
     for (size_t s = 0; s < Rs.size(); ++s) {
       Eigen::Matrix3d R;
       Eigen::Vector3d t;
@@ -275,19 +277,20 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
       cv::cv2eigen(ts[s], t);
       if (t.norm() < 1e-12) continue;
       Reconstruction rec = Reconstruct(camera, R, t, uv_ref, uv_cur, inlier, options);
-      if (rec.num_good > best.num_good) {
-        second_good = best.num_good;
+      if (rec.num_consistent > best.num_consistent) {
+        second_consistent = best.num_consistent;
         best = std::move(rec);
       } else {
-        second_good = std::max(second_good, rec.num_good);
+        second_consistent = std::max(second_consistent, rec.num_consistent);
       }
     }
-    if (best.num_good > 0 && second_good > options.ambiguity_ratio * best.num_good) {
+    if (best.num_consistent > 0 &&
+        second_consistent > options.ambiguity_ratio * best.num_consistent) {
       result.num_good = best.num_good;
       result.median_parallax_deg = best.median_parallax_deg;
-      result.reason = Format("ambiguous homography: second solution has", second_good, ">",
-                             options.ambiguity_ratio * best.num_good) +
-                      " good points";
+      result.reason = Format("ambiguous homography: second solution has", second_consistent, ">",
+                             options.ambiguity_ratio * best.num_consistent) +
+                      " consistent points";
       return result;
     }
   } else {

@@ -120,6 +120,25 @@ TEST(TwoView, PlaneIsReconstructedFromTheHomography) {
             std::cos(3.0 * M_PI / 180.0));
 }
 
+// A plane approached obliquely (the camera moves forward and up, looking at it): its homography
+// has two decompositions with every point in front and reprojecting, the true one and a spurious
+// one with a larger rotation and so a larger apparent parallax. The choice counts the consistent
+// points, which tie: refused as ambiguous. (Counting only the points above the parallax
+// threshold would take the spurious one at some baselines and start a mirrored map.)
+TEST(TwoView, PlaneApproachedObliquelyIsRefusedAsAmbiguous) {
+  for (const double baseline : {0.12, 0.15, 0.2, 0.3}) {
+    const Eigen::Vector3d motion = baseline * Eigen::Vector3d(0.05, -0.7, 0.7).normalized();
+    const Eigen::Matrix3d R = ExpSO3(Eigen::Vector3d(0.005, 0.0, 0.0));
+    const Pose T_cur_ref = MakePose(R, -R * motion);  // The camera moves by `motion`.
+    const Views views = Render(T_cur_ref, true, 0.5, 7);
+    const TwoViewResult r = InitializeTwoView(Camera(), views.ref, views.cur, TwoViewOptions());
+    EXPECT_FALSE(r.ok) << "baseline " << baseline << " m: took t = "
+                       << r.T_cur_ref.translation().transpose() << ", true "
+                       << T_cur_ref.translation().normalized().transpose();
+    EXPECT_NE(r.reason.find("ambiguous homography"), std::string::npos) << r.reason;
+  }
+}
+
 TEST(TwoView, PureRotationIsRefusedForLackOfParallax) {
   const Pose T_cur_ref = MakePose(ExpSO3(Eigen::Vector3d(0.0, 0.15, 0.02)), Eigen::Vector3d::Zero());
   const Views views = Render(T_cur_ref, false, 0.5, 4);
