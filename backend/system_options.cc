@@ -135,6 +135,7 @@ void VisitFrontend(FrontendOptions* f, OptionVisitor* v) {
   v->Field("frontend", "parallel_detection", &f->parallel_detection);
   v->Field("frontend", "local_map_radius_px", &f->local_map.radius_px);
   v->Field("frontend", "local_map_forget_after_frames", &f->local_map.forget_after_frames);
+  v->Field("frontend", "mono_free_matching_below", &f->mono_free_matching_below);
   v->EndExperimental();
   PlaceRecognitionOptions& l = f->loop;
   v->Field("loop", "enable", &l.enable);

@@ -63,6 +63,8 @@ bool FrontendOptions::IsValid(std::string* why) const {
   if (tracking_radius_px <= 0) return fail("frontend.tracking_radius_px must be > 0");
   if (epipolar_gate_px <= 0) return fail("frontend.epipolar_gate_px must be > 0");
   if (keyframe_gate_px <= 0) return fail("frontend.keyframe_gate_px must be > 0");
+  if (!(mono_free_matching_below >= 0 && mono_free_matching_below <= 1))
+    return fail("frontend.mono_free_matching_below must be in [0, 1]");
   return true;
 }
 
@@ -177,6 +179,20 @@ std::optional<MotionEstimate> Frontend::TrackFromPrevious(
   if (!best.motion) {
     // A jerk: matching without a prior, as for a loop closure.
     best = attempt_with(nullptr, std::nullopt);
+  } else if (!rig_.is_stereo() && !from_map &&
+             best.motion->estimate.inliers <
+                 options_.mono_free_matching_below *
+                     static_cast<double>(prev.detection.points.size())) {
+    // One camera before its map exists: no point has a depth, so each is predicted where a
+    // point at infinity would go (the rotation only) and searched within tracking_radius_px.
+    // Moving fast forward, the near points (the parallax the two-view initialisation needs)
+    // land beyond that radius and only the far ones are kept: match without a prior as well,
+    // keep the attempt with more inliers.
+    Attempt unconstrained = attempt_with(nullptr, std::nullopt);
+    if (unconstrained.motion &&
+        unconstrained.motion->estimate.inliers > best.motion->estimate.inliers) {
+      best = std::move(unconstrained);
+    }
   } else if (from_map && best.motion->estimate.inliers < from_map->num_mapped / 2) {
     // One camera: the map-predicted matches keep less than half of the mapped points (a turn
     // the constant velocity did not foresee): try without a prior, keep the better.

@@ -61,6 +61,12 @@ struct FrontendOptions {
   KeyframePolicyOptions keyframe;
   // Search radius around the constant-velocity prediction, pixels.
   double tracking_radius_px = 30.0;
+  // One camera before the map exists: when the matches around the prediction keep fewer than
+  // this fraction of the previous frame's points as motion inliers, the frame is also matched
+  // without a prior and the attempt with more inliers kept (fast forward motion; see
+  // Frontend::TrackFromPrevious). KITTI 06 at 10 Hz keeps 17.8-40 % (starts 0..9), every 2nd / 3rd
+  // frame of it 14-19 % / 10-14 %. 0: never.
+  double mono_free_matching_below = 0.15;
   // Matches of points without depth must lie this close to their epipolar line (pixels).
   double epipolar_gate_px = 2.0;
   // Reprojection gate for the re-acquisition of lost landmarks from the last keyframe (pixels).
