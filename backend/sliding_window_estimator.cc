@@ -10,6 +10,7 @@
 #include <opencv2/core/eigen.hpp>
 #include <sstream>
 
+#include "backend/mono/keyframe_bridge.h"
 #include "core/cv_pose.h"
 
 namespace dala {
@@ -246,6 +247,34 @@ std::optional<Pose> SlidingWindowEstimator::PnpPose(const FrameMeasurement& m,
           << ", pose-only " << PoseOnlyStatusName(r.status) << " (" << r.num_inliers << " inliers)";
   if (r.status != PoseOnlyStatus::kOk || r.num_inliers < min_inliers) return std::nullopt;
   return r.T_w_c;
+}
+
+std::optional<Pose> SlidingWindowEstimator::BridgeFromLastKeyframe(const FrameMeasurement& m,
+                                                                   std::string* note) const {
+  if (!options_.mono_bridge || !last_keyframe_.valid() || !last_tracked_ ||
+      !keyframe_poses_.count(last_keyframe_)) {
+    return std::nullopt;
+  }
+  const int64_t t_kf = frames_.at(first_frame_of_keyframe_.at(last_keyframe_)).t_ns;
+  const double distance =
+      last_tracked_->velocity_w.norm() * 1e-9 * static_cast<double>(m.t_ns - t_kf);
+  std::string why;
+  const std::optional<KeyframeBridge> bridge =
+      BridgeFromKeyframe(rig_.left, KeyframePoseNow(last_keyframe_), last_keyframe_observations_,
+                         m, distance, options_.mono_init.two_view, &why);
+  if (!bridge) {
+    VLOG(1) << "frame " << m.frame << ": no bridge from keyframe " << last_keyframe_ << ": "
+            << why;
+    return std::nullopt;
+  }
+  std::ostringstream os;
+  os.precision(3);
+  os << "bridged from keyframe " << last_keyframe_ << " (too few mapped landmarks: the two-view "
+     << "geometry of " << bridge->num_points << " points, median parallax "
+     << bridge->median_parallax_deg << " deg; the step's length from the last speed)";
+  *note = os.str();
+  VLOG(1) << "frame " << m.frame << ": " << *note;
+  return bridge->T_w_cur;
 }
 
 void SlidingWindowEstimator::ReportLandmarks(EstimatorOutput* out) const {
@@ -628,6 +657,12 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
       T_w_c = *recovered;
       out.valid = true;
       relocalised_ = true;
+    }
+  }
+  if (!out.valid && !first && !stereo) {
+    if (const std::optional<Pose> bridged = BridgeFromLastKeyframe(m, &out.note)) {
+      T_w_c = *bridged;
+      out.valid = true;
     }
   }
   // One camera: the loop closes from the tracked pose (the similarity moves it).

@@ -185,6 +185,9 @@ struct SlidingWindowEstimatorOptions {
   // One camera: after this many lost frames in a row (PnP recovery failing too: the map is out
   // of view), a new map is initialised and placed where the old one would continue.
   int mono_reinit_after_lost_frames = 10;
+  // One camera: a frame neither tracked nor recovered is placed by the two-view geometry with
+  // the last keyframe, scaled by the last speed (BridgeFromLastKeyframe).
+  bool mono_bridge = true;
   // Refine() (System::Finish, `dala run` after the last frame): the global BA over every
   // keyframe (backend/ba/global_ba.h). When: "off", "always", "after_loop" (a run that
   // closed a loop: the pose graph moved the keyframes with an approximate model, and the global
@@ -263,6 +266,10 @@ class SlidingWindowEstimator : public Estimator {
   // have a position, then pose-only over them; nullopt with fewer than min_inliers inliers.
   std::optional<Pose> PnpPose(const FrameMeasurement& m, const std::function<bool(LandmarkId)>& use,
                               int min_inliers) const;
+  // Mono, when neither pose-only tracking nor RecoverPose places m: its pose from the two-view
+  // geometry with the last keyframe (backend/mono/keyframe_bridge.h), the step's length from the
+  // last tracked speed; *note says so. nullopt when the pair fails the two-view tests.
+  std::optional<Pose> BridgeFromLastKeyframe(const FrameMeasurement& m, std::string* note) const;
   // Mono: keyframe `id` (frame m) is the last one; its observations are the candidates for new
   // landmarks at the next keyframe.
   void RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m);

@@ -208,6 +208,7 @@ void VisitBa(SlidingWindowEstimatorOptions* b, OptionVisitor* v) {
   v->Field("ba", "num_held_keyframes", &b->ba.num_held_keyframes);
   v->Field("ba", "cull_held_keyframes", &b->cull_held_keyframes);
   v->Field("ba", "refine_frames", &b->refine_frames);
+  v->Field("ba", "mono_bridge", &b->mono_bridge);
   v->Field("ba", "final_ba_max_iterations", &b->global_ba.max_num_iterations);
   VisitLandmarkExit(&b->ba.landmark_exit, v);
   v->Field("ba", "pose_only_max_solver_time_in_seconds", &b->pose_only.max_solver_time_in_seconds);

@@ -1,0 +1,42 @@
+#include "backend/mono/keyframe_bridge.h"
+
+#include <algorithm>
+
+#include "backend/mono/two_view_refinement.h"
+
+namespace dala {
+
+std::optional<KeyframeBridge> BridgeFromKeyframe(
+    const PinholeCamera& camera, const Pose& T_w_kf,
+    const std::map<LandmarkId, BaObservation>& kf_observations, const FrameMeasurement& m,
+    double distance, const TwoViewOptions& options, std::string* why) {
+  if (!(distance > 0)) {
+    if (why) *why = "no speed to scale the step by";
+    return std::nullopt;
+  }
+  std::vector<Eigen::Vector2d> uv_kf, uv_cur;
+  for (const FeatureObservation& o : m.observations) {
+    const auto it = kf_observations.find(o.landmark);
+    if (it == kf_observations.end()) continue;
+    uv_kf.push_back(it->second.uv);
+    uv_cur.push_back(o.uv);
+  }
+  TwoViewResult pair = InitializeTwoView(camera, uv_kf, uv_cur, options);
+  if (!pair.ok) {
+    if (why) *why = pair.reason;
+    return std::nullopt;
+  }
+  Pose T_cur_kf = pair.T_cur_ref;  // |t| = 1.
+  std::vector<std::optional<Eigen::Vector3d>> points = pair.p_ref;
+  RefineTwoView(camera, uv_kf, uv_cur, options.sigma_px, 20, &T_cur_kf, &points);
+  Pose T_kf_cur = T_cur_kf.inverse();
+  T_kf_cur.translation() *= distance;
+  KeyframeBridge bridge;
+  bridge.T_w_cur = T_w_kf * T_kf_cur;
+  bridge.num_points = static_cast<int>(
+      std::count_if(points.begin(), points.end(), [](const auto& p) { return p.has_value(); }));
+  bridge.median_parallax_deg = pair.median_parallax_deg;
+  return bridge;
+}
+
+}  // namespace dala

@@ -1,0 +1,47 @@
+#ifndef DALA_BACKEND_MONO_KEYFRAME_BRIDGE_H_
+#define DALA_BACKEND_MONO_KEYFRAME_BRIDGE_H_
+
+// One camera, a frame that sees too few mapped landmarks to be tracked (a jerk broke the tracks
+// and the new ones are not triangulated yet): its pose from the two-view geometry with the last
+// keyframe, which has a pose and shares the new tracks.
+//
+//   T_w_cur = T_w_kf * T_kf_cur,   T_kf_cur = (R, distance * t_dir),
+//
+// with R and the direction t_dir from InitializeTwoView (backend/mono/two_view.h: the same tests
+// as the map's first pair, so a weak pair is refused) on the landmarks both observe, refined by
+// the two-view BA, and the distance the caller's guess (the last speed times the time since the
+// keyframe: the one thing the pair cannot tell). Without it such a frame is lost, the next
+// keyframe cannot be added (a mono keyframe needs a pose), the new tracks are never
+// triangulated, and after ba.mono_reinit_after_lost_frames a new map starts with its scale and
+// heading guessed across the whole gap. Bridged, the scale is guessed across one step and the
+// next keyframe triangulates the new tracks with the keyframe.
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "backend/ba/ba_types.h"
+#include "backend/mono/two_view.h"
+#include "core/camera.h"
+#include "core/frame_measurement.h"
+#include "core/geometry.h"
+
+namespace dala {
+
+struct KeyframeBridge {
+  Pose T_w_cur = Pose::Identity();
+  int num_points = 0;  // Triangulated by the pair.
+  double median_parallax_deg = 0.0;
+};
+
+// kf_observations: the keyframe's observations by landmark; m: the current frame. nullopt when
+// the pair fails the two-view tests (*why says which) or distance is not positive.
+std::optional<KeyframeBridge> BridgeFromKeyframe(
+    const PinholeCamera& camera, const Pose& T_w_kf,
+    const std::map<LandmarkId, BaObservation>& kf_observations, const FrameMeasurement& m,
+    double distance, const TwoViewOptions& options, std::string* why);
+
+}  // namespace dala
+
+#endif  // DALA_BACKEND_MONO_KEYFRAME_BRIDGE_H_
