@@ -408,6 +408,17 @@ void DrawMemoryChart(const std::vector<FrameStats>& stats, const std::vector<dou
   bench::DrawStackedLineCharts({{counts, top}, {{rss_curve}, bottom}}, png_path);
 }
 
+// Where the chosen estimator is known not to hold, said before any number (docs/ekf.md, "One
+// camera: measured"): the mono EKF from one camera, with no odometry, has only a
+// constant-velocity model to carry its scale and no loop closing to correct it.
+std::string EstimatorLimitNote(const System& system, const SystemOptions& options) {
+  if (options.estimator != "ekf" || options.mode != "mono") return "";
+  if (system.ScaleDescription() != "arbitrary (monocular)") return "";
+  return "the mono EKF from one camera (no odometry) drifts in scale and depends on the start "
+         "frame (docs/ekf.md, \"One camera: measured\"); for one camera use --estimator ba, for "
+         "this filter give it odometry (odometry.txt)";
+}
+
 // The summary `dala run` prints (and report.html shows).
 void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::json& summary,
                   const RefinementSummary& refinement, size_t frames_with_pose,
@@ -422,6 +433,9 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
       << "scale       " << system.ScaleDescription() << "\n";
   if (const std::string note = system.estimator().DisparityOffsetNote(); !note.empty()) {
     out << "disparity   offset " << note << "\n";
+  }
+  if (const std::string note = EstimatorLimitNote(system, options); !note.empty()) {
+    out << "note        " << note << "\n";
   }
   if (!FLAGS_map.empty()) {
     out << "saved map   " << FLAGS_map << ": "
