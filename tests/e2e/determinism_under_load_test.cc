@@ -6,7 +6,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -15,6 +14,7 @@
 
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -74,10 +74,9 @@ nlohmann::json ExpectIdenticalRunsUnderLoad(const testing::TempDir& dir, const s
   const BusyLoad load(static_cast<int>(std::max(2u, std::thread::hardware_concurrency())));
   EXPECT_GE(load.size(), 2u);
   for (const char* out : {"a", "b"}) {
-    const std::string cmd = std::string(DALA_BINARY) + " run " + dataset + " " + extra +
-                            " --out " + (dir / out) + " --progress=false > " + (dir / out) +
-                            ".log 2>&1";
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << ReadAll(dir / out + std::string(".log"));
+    const testing::DalaCliResult r = testing::RunDala(
+        "run " + dataset + " " + extra + " --out " + (dir / out) + " --progress=false", dir / out);
+    EXPECT_EQ(r.status, 0) << r.log();
   }
   for (const char* file : {"trajectory.txt", "trajectory_kitti.txt", "map.ply", "map.dmap"}) {
     const std::string a = ReadAll(dir / (std::string("a/") + file));

@@ -3,7 +3,6 @@
 // odometry (System fills FrameMeasurement::odometry from Frame::T_w_odom).
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -16,6 +15,7 @@
 #include "core/eval/evaluate.h"
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -121,7 +121,15 @@ TEST(MonoEkfE2e, OdometryIsReadIntoTheMeasurementAndFixesTheScale) {
                              100 * fraction, kOdometryRoverPercentBest, "%");
 }
 
-using testing::ReadAll;
+// `dala run` on dir/seq with FLAGS, its outputs in dir/NAME: all it printed (it must succeed).
+std::string DalaRunLog(const testing::TempDir& dir, const std::string& flags,
+                       const std::string& name) {
+  const testing::DalaCliResult r = testing::RunDala(
+      "run " + (dir / "seq") + " --out " + (dir / name) + " " + flags + " --progress=false",
+      dir / name);
+  EXPECT_EQ(r.status, 0) << flags << "\n" << r.log();
+  return r.log();
+}
 
 // `dala run` on a folder written with --odometry: the reader gives the odometry, the System
 // uses it, the summary says the scale is metric.
@@ -130,12 +138,7 @@ TEST(MonoEkfE2e, DalaRunUsesTheFolderOdometry) {
   sim::SyntheticDatasetOutputs outputs;
   outputs.odometry = true;
   sim::WriteSyntheticDataset(Preset("rover_loop", 20, 9), dir / "seq", outputs);
-  const std::string cmd = std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " +
-                          (dir / "out") +
-                          " --estimator ekf --mode mono --progress=false > " + (dir / "log") +
-                          " 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  const std::string log = ReadAll(dir / "log");
+  const std::string log = DalaRunLog(dir, "--estimator ekf --mode mono", "out");
   EXPECT_NE(log.find("scale       metric (odometry)"), std::string::npos) << log;
   EXPECT_EQ(log.find("for one camera use --estimator ba"), std::string::npos) << log;
 }
@@ -145,14 +148,7 @@ TEST(MonoEkfE2e, DalaRunUsesTheFolderOdometry) {
 TEST(MonoEkfE2e, DalaRunSaysWhereOneCameraDoesNotHold) {
   testing::TempDir dir;
   sim::WriteSyntheticDataset(Preset("rover_loop", 20, 9), dir / "seq", {});
-  const auto run = [&](const std::string& flags, const std::string& name) {
-    const std::string cmd = std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " +
-                            (dir / name) + " " + flags + " --progress=false > " +
-                            (dir / (name + ".log")) + " 2>&1";
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-    return ReadAll(dir / (name + ".log"));
-  };
-  const std::string ekf_mono = run("--estimator ekf --mode mono", "ekf_mono");
+  const std::string ekf_mono = DalaRunLog(dir, "--estimator ekf --mode mono", "ekf_mono");
   EXPECT_NE(ekf_mono.find("scale       arbitrary (monocular)"), std::string::npos) << ekf_mono;
   EXPECT_NE(ekf_mono.find("note        the mono EKF from one camera (no odometry) drifts in "
                           "scale"),
@@ -162,7 +158,7 @@ TEST(MonoEkfE2e, DalaRunSaysWhereOneCameraDoesNotHold) {
   const std::vector<std::pair<std::string, std::string>> others = {
       {"--estimator ba --mode mono", "ba_mono"}, {"--estimator ekf", "ekf_stereo"}};
   for (const auto& [flags, name] : others) {
-    const std::string other = run(flags, name);
+    const std::string other = DalaRunLog(dir, flags, name);
     EXPECT_EQ(other.find("for one camera use --estimator ba"), std::string::npos)
         << flags << "\n" << other;
   }

@@ -2,7 +2,6 @@
 // ground truth, and `dala run` on a rendered dataset folder.
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -16,6 +15,7 @@
 #include "core/io/trajectory_io.h"
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -294,9 +294,9 @@ TEST(SystemE2e, DalaRunIsDeterministicAndWritesEveryOutput) {
   testing::TempDir dir;
   sim::WriteSyntheticDataset(RoverStretch(40, 9), dir / "seq", false);
   for (const char* out : {"a", "b"}) {
-    const std::string cmd = std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " +
-                            (dir / out) + " --progress=false > /dev/null 2>&1";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const testing::DalaCliResult r = testing::RunDala(
+        "run " + (dir / "seq") + " --out " + (dir / out) + " --progress=false", dir / out);
+    ASSERT_EQ(r.status, 0) << r.log();
   }
   for (const char* f : {"trajectory.txt", "trajectory_kitti.txt", "map.ply", "map.dmap",
                         "report.json", "trajectory.png", "memory.png"}) {
@@ -318,17 +318,16 @@ TEST(SystemE2e, DalaRunIsDeterministicAndWritesEveryOutput) {
 
 TEST(SystemE2e, DalaRunReportsBadInputClearly) {
   testing::TempDir dir;
-  const std::string cmd = std::string(DALA_BINARY) + " run " + (dir / "nothing_here") +
-                          " --out " + (dir / "out") + " > " + (dir / "log") + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  EXPECT_EQ(WEXITSTATUS(status), 2);
-  EXPECT_NE(ReadAll(dir / "log").find("nothing_here"), std::string::npos) << ReadAll(dir / "log");
+  const testing::DalaCliResult missing =
+      testing::RunDala("run " + (dir / "nothing_here") + " --out " + (dir / "out"), dir / "log");
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.log().find("nothing_here"), std::string::npos) << missing.log();
   EXPECT_FALSE(std::filesystem::exists(dir / "out/trajectory.txt"));
   // Unknown option key: exit 2 and the message lists the known keys.
-  const std::string cmd2 = std::string(DALA_BINARY) + " run x --out y --set ba.no_such=1 > " +
-                           (dir / "log2") + " 2>&1";
-  EXPECT_EQ(WEXITSTATUS(std::system(cmd2.c_str())), 2);
-  EXPECT_NE(ReadAll(dir / "log2").find("ba.window_size"), std::string::npos);
+  const testing::DalaCliResult unknown =
+      testing::RunDala("run x --out y --set ba.no_such=1", dir / "log2");
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.log().find("ba.window_size"), std::string::npos) << unknown.log();
 }
 
 }  // namespace

@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -12,6 +11,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "core/io/kitti_dataset.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -20,10 +20,11 @@ namespace {
 nlohmann::json DalaRun(const std::string& input, const std::string& extra,
                        const std::string& out) {
   std::filesystem::remove_all(out);
-  const std::string cmd = std::string(DALA_BINARY) + " run " + input + " --config " +
-                          DALA_SOURCE_DIR + "/configs/kitti.yaml --progress=false --out " + out +
-                          " " + extra + " > " + out + ".log 2>&1";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << testing::ReadAll(out + ".log");
+  const testing::DalaCliResult r =
+      testing::RunDala("run " + input + " --config " + DALA_SOURCE_DIR +
+                           "/configs/kitti.yaml --progress=false --out " + out + " " + extra,
+                       out);
+  EXPECT_EQ(r.status, 0) << r.log();
   std::ifstream in(out + "/report.json");
   return nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
 }

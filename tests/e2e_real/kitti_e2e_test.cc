@@ -23,13 +23,13 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -37,12 +37,12 @@ namespace {
 
 nlohmann::json RunKitti(const std::string& extra, const std::string& out) {
   std::filesystem::remove_all(out);
-  const std::string cmd = std::string(DALA_BINARY) + " run " + testing::SharedDataDir() +
-                          "/kitti06_0000-0050 --config " + DALA_SOURCE_DIR +
-                          "/configs/kitti.yaml --progress=false --out " + out + " " + extra +
-                          " > " + out + ".log 2>&1";
   // (configs/kitti.yaml changes nothing in the EKF runs.)
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const testing::DalaCliResult r = testing::RunDala(
+      "run " + testing::SharedDataDir() + "/kitti06_0000-0050 --config " + DALA_SOURCE_DIR +
+          "/configs/kitti.yaml --progress=false --out " + out + " " + extra,
+      out);
+  EXPECT_EQ(r.status, 0) << r.log();
   std::ifstream in(out + "/report.json");
   return nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
 }
@@ -159,10 +159,9 @@ TEST(KittiMonoE2e, FastForwardMotionStartsWithinAFrame) {
     const std::string data = EveryThirdFrame(offset);
     const std::string out = data + "_out";
     std::filesystem::remove_all(out);
-    const std::string cmd = std::string(DALA_BINARY) + " run " + data +
-                            " --mode mono --progress=false --out " + out + " > " + out +
-                            ".log 2>&1";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const testing::DalaCliResult r =
+        testing::RunDala("run " + data + " --mode mono --progress=false --out " + out, out);
+    ASSERT_EQ(r.status, 0) << r.log();
     std::ifstream in(out + "/report.json");
     const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
     ASSERT_FALSE(report.is_discarded()) << "no report.json in " << out;

@@ -5,9 +5,7 @@
 // `dala run` reads the file written.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -15,6 +13,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "core/io/camera_calibration.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -51,11 +50,10 @@ struct Cli {
   std::string out;
 };
 
+// `dala calibrate ARGS`: its exit code and all it printed.
 Cli Calibrate(const std::string& args, const TempDir& dir) {
-  const std::string log = dir / "log.txt";
-  const std::string cmd = std::string(DALA_BINARY) + " calibrate " + args + " > " + log + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadAll(log)};
+  const testing::DalaCliResult r = testing::RunDala("calibrate " + args, dir / "calibrate");
+  return {r.status, r.log()};
 }
 
 TEST(CalibrateCli, MonoAgreesWithOpenCvsPublishedIntrinsicsAndRejectsBadViews) {

@@ -18,6 +18,7 @@
 #include "core/io/trajectory_io.h"
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -29,17 +30,9 @@ using ::testing::Not;
 
 using testing::ReadAll;
 
-struct RunResult {
-  int status = -1;
-  std::string err;
-};
-
-RunResult DalaRun(const std::string& args, const testing::TempDir& dir) {
-  const std::string err = dir / "stderr.txt";
-  const std::string cmd =
-      std::string(DALA_BINARY) + " run " + args + " --progress=false > /dev/null 2> " + err;
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadAll(err)};
+// `dala run ARGS`: its exit code and stderr.
+testing::DalaCliResult DalaRun(const std::string& args, const testing::TempDir& dir) {
+  return testing::RunDala("run " + args + " --progress=false", dir / "dala");
 }
 
 // A rendered stereo folder: the rover loop's first `frames` frames.
@@ -75,7 +68,7 @@ class BadFrames : public ::testing::Test {
 };
 
 TEST_F(BadFrames, AreSkippedAndReportedLost) {
-  const RunResult r = DalaRun(seq_ + " --out " + (dir_ / "out"), dir_);
+  const auto r = DalaRun(seq_ + " --out " + (dir_ / "out"), dir_);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_THAT(r.err, HasSubstr("frame 12 skipped"));
   EXPECT_THAT(r.err, HasSubstr("image_0/000012.png"));
@@ -122,7 +115,7 @@ TEST_F(BadFrames, AreSkippedAndReportedLost) {
 
 TEST_F(BadFrames, StrictStopsNamingTheFile) {
   // The missing image is found when the folder is opened, the truncated one when it is read.
-  RunResult r = DalaRun(seq_ + " --strict --out " + (dir_ / "out"), dir_);
+  auto r = DalaRun(seq_ + " --strict --out " + (dir_ / "out"), dir_);
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("missing right image '" + seq_ + "/image_1/000025.png'"));
   EXPECT_FALSE(fs::exists(dir_ / "out/trajectory.txt"));
@@ -138,7 +131,7 @@ TEST_F(BadFrames, StrictStopsNamingTheFile) {
 }
 
 TEST_F(BadFrames, TheFirstFrameIsNotSkipped) {
-  const RunResult r = DalaRun(seq_ + " --first_frame 25 --out " + (dir_ / "out"), dir_);
+  const auto r = DalaRun(seq_ + " --first_frame 25 --out " + (dir_ / "out"), dir_);
   EXPECT_EQ(r.status, 2);
   EXPECT_THAT(r.err, HasSubstr("image_1/000025.png"));
   EXPECT_THAT(r.err, HasSubstr("--first_frame 26"));

@@ -4,15 +4,14 @@
 // file and the fix, and writes nothing.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "core/io/bag_dataset.h"
 #include "core/sim/dataset_writer.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -23,17 +22,9 @@ using ::testing::HasSubstr;
 using testing::ReadAll;
 using testing::TempDir;
 
-struct Cli {
-  int status = -1;
-  std::string err;
-};
-
-Cli DalaRun(const std::string& args, const TempDir& dir) {
-  const std::string err = dir / "stderr.txt";
-  const std::string cmd =
-      std::string(DALA_BINARY) + " run " + args + " --progress=false > /dev/null 2> " + err;
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadAll(err)};
+// `dala run ARGS`: its exit code and stderr.
+testing::DalaCliResult DalaRun(const std::string& args, const TempDir& dir) {
+  return testing::RunDala("run " + args + " --progress=false", dir / "dala");
 }
 
 void Write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
@@ -47,7 +38,7 @@ TEST(RunOwnCameraCli, ImageFolderWithCalibrationTimesAndGroundTruth) {
   sim.lens = "radtan";
   sim::WriteSyntheticDataset(sim, dir / "seq", false);
   const std::string seq = dir / "seq";
-  const Cli cli = DalaRun(seq + "/image_0 --calibration " + seq + "/calibration/opencv.yml --times " +
+  const auto cli = DalaRun(seq + "/image_0 --calibration " + seq + "/calibration/opencv.yml --times " +
                           seq + "/times.txt --ground_truth " + seq + "/poses.txt --mode mono " +
                           "--out " + (dir / "out"),
                       dir);
@@ -63,7 +54,7 @@ TEST(RunOwnCameraCli, BadInputExitsTwoNamingTheFileAndWritesNothing) {
   TempDir dir;
   Write(dir / "cam.yaml", "%YAML:1.0\nfx: 80\nfy: 80\ncx: 32\ncy: 24\nwidth: 64\nheight: 48\n");
   Write(dir / "broken.mp4", "not a video at all, only text");
-  Cli cli = DalaRun((dir / "broken.mp4") + " --calibration " + (dir / "cam.yaml") + " --mode mono " +
+  auto cli = DalaRun((dir / "broken.mp4") + " --calibration " + (dir / "cam.yaml") + " --mode mono " +
                     "--out " + (dir / "out"),
                 dir);
   EXPECT_EQ(cli.status, 2);

@@ -14,6 +14,7 @@
 
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -86,10 +87,9 @@ TEST(ReportBrowser, DrawsThePathAndMovesTheMarkerWithTheTime) {
   sim.height = 240;
   sim.seed = 3;
   sim::WriteSyntheticDataset(sim, dir / "seq", false);
-  ASSERT_EQ(System(std::string(DALA_BINARY) + " run " + (dir / "seq") + " --out " + (dir / "run") +
-                   " --progress=false > /dev/null 2> " + (dir / "run.log")),
-            0)
-      << ReadAll(dir / "run.log");
+  const testing::DalaCliResult run = testing::RunDala(
+      "run " + (dir / "seq") + " --out " + (dir / "run") + " --progress=false", dir / "run");
+  ASSERT_EQ(run.status, 0) << run.err;
   const std::string html = dir / "run/report.html";
   ASSERT_TRUE(std::filesystem::exists(html));
   const std::string url = "file://" + html;

@@ -10,6 +10,7 @@
 
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/dala_cli.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -17,11 +18,9 @@ namespace {
 
 using testing::ReadAll;
 
+// `dala ARGS`: its exit code; what it printed is in dala.out and dala.err of DIR.
 int Dala(const std::string& args, const testing::TempDir& dir) {
-  const int status = std::system((std::string(DALA_BINARY) + " " + args + " > " +
-                                  (dir / "out.txt") + " 2> " + (dir / "err.txt"))
-                                     .c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return testing::RunDala(args, dir / "dala").status;
 }
 
 TEST(ViewCli, WritesTheReportOfARunAndOfASavedMap) {
@@ -37,14 +36,14 @@ TEST(ViewCli, WritesTheReportOfARunAndOfASavedMap) {
   const int run_status =
       std::system(("cd " + dir.path() + " && " + DALA_BINARY +
                    " run seq --out run --progress=false --video run/frames.mp4 > " +
-                   (dir / "out.txt") + " 2> " + (dir / "err.txt"))
+                   (dir / "dala.out") + " 2> " + (dir / "dala.err"))
                       .c_str());
-  ASSERT_TRUE(WIFEXITED(run_status) && WEXITSTATUS(run_status) == 0) << ReadAll(dir / "err.txt");
-  EXPECT_NE(ReadAll(dir / "out.txt").find("video       run/frames.mp4 (30 frames"),
+  ASSERT_TRUE(WIFEXITED(run_status) && WEXITSTATUS(run_status) == 0) << ReadAll(dir / "dala.err");
+  EXPECT_NE(ReadAll(dir / "dala.out").find("video       run/frames.mp4 (30 frames"),
             std::string::npos)
-      << ReadAll(dir / "out.txt");
-  EXPECT_NE(ReadAll(dir / "out.txt").find("report      run/report.html"), std::string::npos)
-      << ReadAll(dir / "out.txt");
+      << ReadAll(dir / "dala.out");
+  EXPECT_NE(ReadAll(dir / "dala.out").find("report      run/report.html"), std::string::npos)
+      << ReadAll(dir / "dala.out");
   const std::string html = dir / "run/report.html";
   const std::string from_run = ReadAll(html);
   ASSERT_NE(from_run.find("\"ground_truth\""), std::string::npos);
@@ -52,22 +51,22 @@ TEST(ViewCli, WritesTheReportOfARunAndOfASavedMap) {
 
   // Again from the folder, given from another working directory: the ground truth is found
   // again (the dataset's absolute path).
-  ASSERT_EQ(Dala("view " + (dir / "run"), dir), 0) << ReadAll(dir / "err.txt");
-  EXPECT_EQ(ReadAll(dir / "out.txt"), html + "\n");
+  ASSERT_EQ(Dala("view " + (dir / "run"), dir), 0) << ReadAll(dir / "dala.err");
+  EXPECT_EQ(ReadAll(dir / "dala.out"), html + "\n");
   const std::string from_view = ReadAll(html);
   EXPECT_NE(from_view.find("\"ground_truth\""), std::string::npos);
   EXPECT_NE(from_view.find("\"summary_text\":\"frames      30"), std::string::npos);
 
   // A saved map alone: beside it, not over the run's report.
-  ASSERT_EQ(Dala("view " + (dir / "run/map.dmap"), dir), 0) << ReadAll(dir / "err.txt");
-  EXPECT_EQ(ReadAll(dir / "out.txt"), (dir / "run/map_report.html") + "\n");
+  ASSERT_EQ(Dala("view " + (dir / "run/map.dmap"), dir), 0) << ReadAll(dir / "dala.err");
+  EXPECT_EQ(ReadAll(dir / "dala.out"), (dir / "run/map_report.html") + "\n");
   EXPECT_NE(ReadAll(dir / "run/map_report.html").find("keyframes, "), std::string::npos);
 
   // Not a run: exit 2, naming what is missing.
   std::filesystem::create_directories(dir / "empty");
   EXPECT_EQ(Dala("view " + (dir / "empty"), dir), 2);
-  EXPECT_NE(ReadAll(dir / "err.txt").find("report.json: missing"), std::string::npos)
-      << ReadAll(dir / "err.txt");
+  EXPECT_NE(ReadAll(dir / "dala.err").find("report.json: missing"), std::string::npos)
+      << ReadAll(dir / "dala.err");
 }
 
 }  // namespace
