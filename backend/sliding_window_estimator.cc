@@ -249,6 +249,17 @@ std::optional<Pose> SlidingWindowEstimator::PnpPose(const FrameMeasurement& m,
   return r.T_w_c;
 }
 
+TwoViewOptions SlidingWindowEstimator::BridgeTwoViewOptions() const {
+  // The initialisation's tests (spread over the image, parallax, no ambiguous homography) but
+  // not its point count: a bridge starts no map, it places one frame by the rotation and the
+  // direction of 20 or more good points (fast 300 seed 2: a jerk leaves 45 tracks; refused at
+  // 50, the frames after it are lost until a new map starts, 15 of them).
+  constexpr int kBridgeMinPoints = 20;
+  TwoViewOptions o = options_.mono_init.two_view;
+  o.min_points = std::min(o.min_points, kBridgeMinPoints);
+  return o;
+}
+
 std::optional<Pose> SlidingWindowEstimator::BridgeFromLastKeyframe(const FrameMeasurement& m,
                                                                    std::string* note) const {
   if (!options_.mono_bridge || !last_keyframe_.valid() || !last_tracked_ ||
@@ -261,7 +272,7 @@ std::optional<Pose> SlidingWindowEstimator::BridgeFromLastKeyframe(const FrameMe
   std::string why;
   const std::optional<KeyframeBridge> bridge =
       BridgeFromKeyframe(rig_.left, KeyframePoseNow(last_keyframe_), last_keyframe_observations_,
-                         m, distance, options_.mono_init.two_view, &why);
+                         m, distance, BridgeTwoViewOptions(), &why);
   if (!bridge) {
     VLOG(1) << "frame " << m.frame << ": no bridge from keyframe " << last_keyframe_ << ": "
             << why;
@@ -659,10 +670,13 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
       relocalised_ = true;
     }
   }
+  // A bridged frame: the keyframe it was bridged from and T_kf_cur (a prior if it becomes one).
+  std::optional<std::pair<KeyframeId, Pose>> bridged_from;
   if (!out.valid && !first && !stereo) {
     if (const std::optional<Pose> bridged = BridgeFromLastKeyframe(m, &out.note)) {
       T_w_c = *bridged;
       out.valid = true;
+      bridged_from.emplace(last_keyframe_, KeyframePoseNow(last_keyframe_).inverse() * *bridged);
     }
   }
   // One camera: the loop closes from the tracked pose (the similarity moves it).
@@ -695,6 +709,12 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     kf.T_w_c = T_w_c;
     kf.observations = SelectKeyframeObservations(m, T_w_c);
     AddToWindow(kf, m);
+    // A bridged keyframe keeps the bridge's relative pose as a prior while its own landmarks
+    // are new (SlidingWindowBa::AddRelativePosePrior); a loop closed here moved it since.
+    if (bridged_from && !out.loop_closed && ba_.KeyframePose(bridged_from->first)) {
+      ba_.AddRelativePosePrior(bridged_from->first, kf.id, bridged_from->second,
+                               BridgeInformation(bridged_from->second));
+    }
     keyframe_poses_[kf.id] = T_w_c;
     first_frame_of_keyframe_[kf.id] = frames_.size();
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});

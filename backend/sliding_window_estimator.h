@@ -270,6 +270,8 @@ class SlidingWindowEstimator : public Estimator {
   // geometry with the last keyframe (backend/mono/keyframe_bridge.h), the step's length from the
   // last tracked speed; *note says so. nullopt when the pair fails the two-view tests.
   std::optional<Pose> BridgeFromLastKeyframe(const FrameMeasurement& m, std::string* note) const;
+  // The two-view tests of a bridge (mono_init's, with fewer points).
+  TwoViewOptions BridgeTwoViewOptions() const;
   // Mono: keyframe `id` (frame m) is the last one; its observations are the candidates for new
   // landmarks at the next keyframe.
   void RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m);

@@ -4,12 +4,9 @@
 // SE(3) pose graph over keyframe poses: relative-pose edges between consecutive keyframes
 // (odometry, e.g. from the window BA) and loop-closure edges, solved with Ceres.
 //
-// Edge residual for a measurement T_a_b_meas between keyframes a and b (poses T_w_a, T_w_b):
-//   T_err = T_a_b_meas^-1 * (T_w_a^-1 * T_w_b),   e = [2 vec(q_err); t_err]   (6, [rot; trans])
-//   r = sqrt_info * e,   sqrt_info^T sqrt_info = information (6x6, [rotation; translation]).
-// e equals Log(T_err) = [phi; rho] to first order, i.e. the right-perturbation error of the
-// measurement in the frame b, so `information` is the inverse covariance of T_a_b_meas in
-// dala's convention (core/geometry.h). Poses live on the product manifold of
+// Edge residual for a measurement T_a_b_meas between keyframes a and b: backend/ba/
+// relative_pose_cost.h (the right-perturbation error in the frame b, whitened by the edge's
+// information, dala's convention of core/geometry.h). Poses live on the product manifold of
 // backend/ba/pose_block.h. The gauge: the pose of the first keyframe (smallest id) is constant.
 //
 // The caller moves each landmark with its anchor keyframe after the correction:

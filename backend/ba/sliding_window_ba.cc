@@ -4,6 +4,7 @@
 #include <ceres/solver.h>
 #include <glog/logging.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "backend/ba/relative_pose_cost.h"
 #include "backend/ba/reprojection_factors.h"
 #include "backend/ba/solver_time.h"
 
@@ -119,6 +121,25 @@ void SlidingWindowBa::AddKeyframe(const BaKeyframe& kf) {
   InitializeStereoLandmarks(window_.back());
 }
 
+void SlidingWindowBa::AddRelativePosePrior(KeyframeId a, KeyframeId b, const Pose& T_a_b,
+                                           const Matrix6d& information) {
+  CHECK(BlockOf(a) != nullptr && BlockOf(b) != nullptr)
+      << "relative-pose prior between keyframes " << a << " and " << b
+      << ", which are not both in the window or held";
+  const Eigen::LLT<Matrix6d> llt(0.5 * (information + information.transpose()));
+  CHECK(llt.info() == Eigen::Success) << "relative-pose prior: information not positive definite";
+  relative_priors_.push_back({a, b, T_a_b, llt.matrixU()});
+}
+
+double* SlidingWindowBa::BlockOf(KeyframeId id) {
+  for (auto* keyframes : {&window_, &held_}) {
+    for (KeyframeState& kf : *keyframes) {
+      if (kf.id == id) return kf.x.data();
+    }
+  }
+  return nullptr;
+}
+
 void SlidingWindowBa::ForgetLandmarks(const std::vector<LandmarkId>& ids) {
   if (ids.empty()) return;
   std::set<LandmarkId> observed;
@@ -149,6 +170,8 @@ void SlidingWindowBa::ApplyCorrection(const std::map<KeyframeId, Pose>& T_w_kf) 
     }
   }
   DropPrior();
+  // A similarity correction (one camera) rescales the relative translations they hold.
+  relative_priors_.clear();
 }
 
 void SlidingWindowBa::DropPrior() {
@@ -341,6 +364,21 @@ std::set<LandmarkId> SlidingWindowBa::BuildProblem(const std::map<LandmarkId, in
     }
     *num_held_used += used ? 1 : 0;
   }
+  // The relative-pose priors whose keyframes are both here, one of them free.
+  for (const RelativePosePrior& r : relative_priors_) {
+    double* x_a = BlockOf(r.a);
+    double* x_b = BlockOf(r.b);
+    if (x_a == nullptr || x_b == nullptr) continue;
+    for (double* x : {x_a, x_b}) {
+      if (!problem->HasParameterBlock(x)) {
+        problem->AddParameterBlock(x, 7, manifold);
+        problem->SetParameterBlockConstant(x);
+      }
+    }
+    if (problem->IsParameterBlockConstant(x_a) && problem->IsParameterBlockConstant(x_b)) continue;
+    problem->AddResidualBlock(CreateRelativePoseCost(r.T_a_b, r.sqrt_information), nullptr, x_a,
+                              x_b);
+  }
   if (offset != nullptr && problem->HasParameterBlock(offset)) {
     problem->AddResidualBlock(CreateOffsetPriorCost(options_.disparity_offset_prior_sigma_px),
                               nullptr, offset);
@@ -422,6 +460,11 @@ SlidingWindowBa::Summary SlidingWindowBa::Optimize() {
   summary.num_keyframes = static_cast<int>(window_.size());
   if (window_.empty()) return summary;
   InitializeMonoLandmarks();
+  relative_priors_.erase(std::remove_if(relative_priors_.begin(), relative_priors_.end(),
+                                        [&](const RelativePosePrior& r) {
+                                          return BlockOf(r.a) == nullptr || BlockOf(r.b) == nullptr;
+                                        }),
+                         relative_priors_.end());
 
   auto manifold = MakePoseManifold();
   auto loss = MakeLoss(options_.loss, options_.loss_scale);

@@ -201,8 +201,20 @@ class SlidingWindowBa {
   // marginalisation prior, which was linearised at the old poses and held the old gauge (moving
   // its linearisation points consistently is not worth it for a prior that is off by default);
   // the oldest window keyframe is then held constant, carrying the gauge as the first keyframe
-  // did. The caller moves the landmarks (SetLandmarkPosition).
+  // did. The relative-pose priors are dropped too (a similarity rescales what they hold). The
+  // caller moves the landmarks (SetLandmarkPosition).
   void ApplyCorrection(const std::map<KeyframeId, Pose>& T_w_kf);
+
+  // A relative pose between two added keyframes known apart from their shared landmarks (a mono
+  // keyframe bridged from the last one: rotation and direction from their two-view geometry,
+  // distance from the last speed), with its information (6x6, [rotation; translation], the
+  // right perturbation in the frame b: backend/ba/relative_pose_cost.h). A factor of every
+  // window solve while both keyframes are in the window or held, one of them free; it is not
+  // marginalised into the prior. Why: a keyframe whose tracks all broke shares few landmarks
+  // with the window, and the new ones it starts are seen by it and the keyframe it was bridged
+  // from only, so the solve can move it and its new landmarks with a similarity of their own.
+  void AddRelativePosePrior(KeyframeId a, KeyframeId b, const Pose& T_a_b,
+                            const Matrix6d& information);
 
   // Optimises the window: solve, reject outliers, re-solve.
   Summary Optimize();
@@ -244,7 +256,15 @@ class SlidingWindowBa {
     std::vector<BaObservation> observations;
   };
 
+  struct RelativePosePrior {
+    KeyframeId a, b;
+    Pose T_a_b;
+    Matrix6d sqrt_information;
+  };
+
   void MarginalizeOldest();
+  // The pose block of a window or held keyframe (nullptr: neither).
+  double* BlockOf(KeyframeId id);
   // Forgets the marginalisation prior; the oldest window keyframe then holds the gauge.
   void DropPrior();
   // Moves the leaving keyframe into held_ with the observations that `consumed` (landmarks
@@ -283,6 +303,7 @@ class SlidingWindowBa {
   // the window's landmarks are those its keyframes observe. std::map: stable addresses for Ceres.
   std::map<LandmarkId, Eigen::Vector3d> landmarks_;
   MarginalizationPrior prior_;
+  std::vector<RelativePosePrior> relative_priors_;  // see AddRelativePosePrior.
   std::vector<MarginalizedKeyframe> marginalized_;
   DisparityOffsetCalibration offset_calibration_;
   double prior_offset_px_ = 0.0;  // the disparity offset the prior was built with.

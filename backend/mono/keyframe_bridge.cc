@@ -39,4 +39,15 @@ std::optional<KeyframeBridge> BridgeFromKeyframe(
   return bridge;
 }
 
+Matrix6d BridgeInformation(const Pose& T_kf_cur) {
+  constexpr double kSigmaRotationRad = 0.01;
+  constexpr double kSigmaStepFraction = 0.25;
+  const double sigma_t = std::max(kSigmaStepFraction * T_kf_cur.translation().norm(), 1e-6);
+  Matrix6d information = Matrix6d::Zero();
+  information.topLeftCorner<3, 3>().diagonal().setConstant(1.0 /
+                                                           (kSigmaRotationRad * kSigmaRotationRad));
+  information.bottomRightCorner<3, 3>().diagonal().setConstant(1.0 / (sigma_t * sigma_t));
+  return information;
+}
+
 }  // namespace dala

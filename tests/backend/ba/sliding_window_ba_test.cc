@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include <iostream>
-
 #include <algorithm>
+#include <cmath>
+#include <iostream>
 #include <random>
 
 #include "tests/backend/ba/ba_synthetic_scene.h"
@@ -271,6 +271,64 @@ TEST(SlidingWindowBaTest, MonoHoldsTheLastTwoKeyframesToLeaveByDefault) {
   }
   EXPECT_EQ(ba.HeldKeyframes(), (std::vector<KeyframeId>{KeyframeId(4), KeyframeId(5)}));
   EXPECT_LT(max_err, 0.03);  // No alignment: the first two keyframes hold the gauge.
+}
+
+// One camera, a keyframe whose tracks all broke (a jerk): keyframe 6 sees none of the window's
+// landmarks, only new ones that keyframe 5 sees too. The two views fix its rotation and
+// direction but not its distance: started at twice the true step, with its new landmarks
+// scaled alike (every residual zero), the solve leaves it there; the relative pose a bridge
+// measured (SlidingWindowBa::AddRelativePosePrior) brings it back.
+TEST(SlidingWindowBaTest, RelativePosePriorHoldsTheScaleOfAKeyframeWithOnlyNewLandmarks) {
+  const BaScene scene = MakeBaScene(MonoScene());
+  constexpr int64_t kNewIds = 100000;
+  const Pose& T_w_5 = scene.T_w_c_gt[5];
+  const Pose& T_w_6 = scene.T_w_c_gt[6];
+  const Pose T_5_6 = T_w_5.inverse() * T_w_6;
+  // Keyframe 6 and its new landmarks scaled by 2 about keyframe 5.
+  const auto doubled = [&](const Eigen::Vector3d& p_w) {
+    return T_w_5 * (2.0 * (T_w_5.inverse() * p_w));
+  };
+  const auto run = [&](bool with_prior) {
+    SlidingWindowBa::Options options;
+    options.window_size = 7;
+    options.max_num_iterations = 50;
+    SlidingWindowBa ba(scene.K, options);
+    std::mt19937 rng(3);
+    SeedLandmarks(scene, 0.02, &rng, &ba);
+    for (int i = 0; i < 6; ++i) ba.AddKeyframe(scene.keyframes[i]);
+    BaKeyframe kf6 = scene.keyframes[6];
+    kf6.T_w_c = MakePose(T_w_6.rotation(), doubled(T_w_6.translation()));
+    for (BaObservation& o : kf6.observations) {
+      const int64_t j = o.landmark.value;
+      const BaObservation* seen_by_5 = nullptr;
+      for (const BaObservation& o5 : scene.keyframes[5].observations) {
+        if (o5.landmark.value == j) seen_by_5 = &o5;
+      }
+      o.landmark = LandmarkId(kNewIds + j);
+      if (seen_by_5 == nullptr) continue;
+      BaObservation in_5 = *seen_by_5;
+      in_5.landmark = o.landmark;
+      ba.AddObservation(KeyframeId(5), in_5);
+      ba.SetLandmarkPosition(o.landmark, doubled(scene.p_w_gt[static_cast<size_t>(j)]));
+    }
+    ba.AddKeyframe(kf6);
+    if (with_prior) {
+      Matrix6d information = Matrix6d::Identity();
+      information.topLeftCorner<3, 3>() *= 1e4;  // 0.01 rad
+      information.bottomRightCorner<3, 3>() *= 1.0 / std::pow(0.25 * T_5_6.translation().norm(), 2);
+      ba.AddRelativePosePrior(KeyframeId(5), KeyframeId(6), T_5_6, information);
+    }
+    const auto s = ba.Optimize();
+    EXPECT_TRUE(s.usable) << s.BriefReport();
+    return (ba.KeyframePose(KeyframeId(6))->translation() - T_w_6.translation()).norm() /
+           T_5_6.translation().norm();
+  };
+  const double without = run(false);
+  const double with = run(true);
+  std::cout << "[ measured ] keyframe 6's position error in steps: " << without
+            << " without the prior, " << with << " with it" << std::endl;
+  EXPECT_GT(without, 0.5);
+  EXPECT_LT(with, 0.1);
 }
 
 TEST(SlidingWindowBaTest, GrossOutliersAreRemoved) {
