@@ -106,6 +106,21 @@ TEST(MonoE2e, RoverStretchMonoBa) {
                              kRoverAtePercentBest, "%");
 }
 
+// The fast preset's first 200 frames rendered with `seed`, run with one camera.
+MonoRun RunFast200(uint64_t seed) {
+  sim::SimOptions sim = Preset("fast", 200);
+  sim.seed = seed;
+  return RunRendered(sim::SyntheticSequence(sim), MonoBa());
+}
+
+// Frames placed by a bridge from the last keyframe (their note says so).
+int NumBridged(const MonoRun& run) {
+  return static_cast<int>(
+      std::count_if(run.notes.begin(), run.notes.end(), [](const std::string& n) {
+        return n.rfind("bridged from keyframe", 0) == 0;
+      }));
+}
+
 // The fast preset, seed 2: at frame 105 a jerk breaks the tracks (48 kept), and the frames after
 // it see almost no mapped landmark (4 of them) until the new tracks are triangulated. Frame 107
 // is placed by the two-view geometry with the last keyframe (ba.mono_bridge), the next keyframes
@@ -113,15 +128,10 @@ TEST(MonoE2e, RoverStretchMonoBa) {
 // frames 105-116 are lost and a new map starts from frame 117 with its scale guessed across the
 // gap, 17 % off (1.02 m).
 TEST(MonoE2e, AJerkThatBreaksTheTracksIsBridged) {
-  sim::SimOptions sim = Preset("fast", 200);
-  sim.seed = 2;
-  const sim::SyntheticSequence seq(sim);
-  const MonoRun run = RunRendered(seq, MonoBa());
+  const MonoRun run = RunFast200(2);
   ASSERT_TRUE(run.eval.ok) << run.eval.error;
   EXPECT_LE(run.lost_after, 2);
-  const int bridged = static_cast<int>(std::count_if(
-      run.notes.begin(), run.notes.end(),
-      [](const std::string& n) { return n.rfind("bridged from keyframe", 0) == 0; }));
+  const int bridged = NumBridged(run);
   EXPECT_GE(bridged, 1);
   std::cout << "[ measured ] ba/mono fast seed 2: Sim(3) ATE " << run.eval.ate.translation.rmse
             << " m, " << run.lost_after << " frames lost, " << bridged << " bridged" << std::endl;
@@ -136,16 +146,9 @@ TEST(MonoE2e, AJerkThatBreaksTheTracksIsBridged) {
 // the window solve moved it 9 units and its new map took a scale 3.1x the old one's (ATE
 // 3.61 m). With it: the scale along the path stays within 0.963-1.055.
 TEST(MonoE2e, ABridgedKeyframeKeepsTheScale) {
-  sim::SimOptions sim = Preset("fast", 200);
-  sim.seed = 4;
-  const sim::SyntheticSequence seq(sim);
-  const MonoRun run = RunRendered(seq, MonoBa());
+  const MonoRun run = RunFast200(4);
   ASSERT_TRUE(run.eval.ok) << run.eval.error;
-  EXPECT_GE(std::count_if(run.notes.begin(), run.notes.end(),
-                          [](const std::string& n) {
-                            return n.rfind("bridged from keyframe", 0) == 0;
-                          }),
-            1);
+  EXPECT_GE(NumBridged(run), 1);
   const ScaleAlongPath scale = MeasureScaleAlongPath(run.eval);
   std::cout << "[ measured ] ba/mono fast seed 4: Sim(3) ATE " << run.eval.ate.translation.rmse
             << " m, scale along the path " << scale.min << " to " << scale.max << std::endl;
