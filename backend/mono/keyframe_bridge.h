@@ -46,11 +46,11 @@ std::optional<KeyframeBridge> BridgeFromKeyframe(
 // How well a bridge knows T_kf_cur, as the information of a relative-pose prior between the
 // keyframe and the bridged frame made a keyframe (SlidingWindowBa::AddRelativePosePrior:
 // [rotation; translation], the right perturbation in the current frame). Rotation: 0.01 rad a
-// axis (the two-view rotation of >= 50 points is good to a tenth of that; the prior only has to
-// keep the solve from turning the bridged keyframe with its new landmarks). Translation: 0.25 x
-// the step's length, isotropic (the step's length is a guess from the last speed, which a jerk
-// changes by tens of percent; the direction is better known, but the prior only has to keep
-// the step's scale and place from running away).
+// axis (the two-view rotation of >= 20 spread points is good to a fraction of that; the prior
+// only has to keep the solve from turning the bridged keyframe with its new landmarks).
+// Translation: 0.25 x the step's length, isotropic (the step's length is a guess from the last
+// speed, which a jerk changes by tens of percent; the direction is better known, but the prior
+// only has to keep the step's scale and place from running away).
 Matrix6d BridgeInformation(const Pose& T_kf_cur);
 
 }  // namespace dala
