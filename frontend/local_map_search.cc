@@ -87,6 +87,7 @@ std::optional<LocalMapSearch::Prediction> LocalMapSearch::PredictFromMap(
   Prediction out;
   out.T_prev_cur = velocity_;
   out.p_prev.assign(landmark.size(), std::nullopt);
+  out.mapped.assign(landmark.size(), false);
   std::vector<double> depths;
   for (size_t i = 0; i < landmark.size(); ++i) {
     const auto it = point_of_.find(landmark[i]);
@@ -94,6 +95,7 @@ std::optional<LocalMapSearch::Prediction> LocalMapSearch::PredictFromMap(
     const Eigen::Vector3d p_c = T_c_w * it->second;
     if (p_c.z() <= 0) continue;
     out.p_prev[i] = p_c;
+    out.mapped[i] = true;
     depths.push_back(p_c.z());
   }
   if (static_cast<int>(depths.size()) < min_points) return std::nullopt;

@@ -93,7 +93,8 @@ class LocalMapSearch {
   struct Prediction {
     Pose T_prev_cur = Pose::Identity();
     std::vector<std::optional<Eigen::Vector3d>> p_prev;  // Previous camera frame.
-    int num_mapped = 0;  // Points placed at their landmark's estimate.
+    std::vector<bool> mapped;  // Per point: placed at its landmark's estimate.
+    int num_mapped = 0;        // Points placed at their landmark's estimate.
   };
   std::optional<Prediction> PredictFromMap(FrameId previous_frame,
                                            const std::vector<LandmarkId>& landmark,

@@ -26,8 +26,9 @@ constexpr double kRoverAtePercentBest = 0.0598;        // 0.0168 m over 28.0 m.
 constexpr double kBlackAtePercentBest = 0.0830;
 constexpr double kKittiAteMetresBest = 0.0308;
 constexpr double kStereoBlackAtePercentBest = 0.0381;  // Without relocalisation: 0.0477 %.
-constexpr double kJerkAteMetresBest = 0.0909;
-constexpr double kBridgedScaleAteMetresBest = 0.3823;  // fast 200 seed 4 (a jerk at frame 190).
+constexpr double kJerkSeed4AteMetresBest = 0.2567;  // fast 200 seed 4 (jerks).
+constexpr double kJerkSeed7AteMetresBest = 0.0509;  // fast 200 seed 7 (a jerk at frame 90).
+constexpr double kGapBridgedAteMetresBest = 0.1205;  // fast 200 seed 2, frames 60-67 dropped.
 constexpr double kTurnStartAtePercentBest = 0.0550;    // 0.0185 m over 33.7 m (seed 2, 120).
 
 struct MonoRun {
@@ -106,11 +107,17 @@ TEST(MonoE2e, RoverStretchMonoBa) {
                              kRoverAtePercentBest, "%");
 }
 
-// The fast preset's first 200 frames rendered with `seed`, run with one camera.
-MonoRun RunFast200(uint64_t seed) {
+// The fast preset's first 200 frames rendered with `seed`, run with one camera; the frames
+// [gap_begin, gap_begin + gap_size) are never given (a camera that dropped them: the next frame
+// comes 0.1 s x (gap_size + 1) after the last one).
+MonoRun RunFast200(uint64_t seed, size_t gap_begin = 0, size_t gap_size = 0) {
   sim::SimOptions sim = Preset("fast", 200);
   sim.seed = seed;
-  return RunRendered(sim::SyntheticSequence(sim), MonoBa());
+  const sim::SyntheticSequence seq(sim);
+  return RunFrames(
+      seq.rig(), seq.size() - gap_size,
+      [&](size_t i) { return seq.Render(i < gap_begin ? i : i + gap_size); }, seq.ground_truth(),
+      MonoBa());
 }
 
 // Frames placed by a bridge from the last keyframe (their note says so).
@@ -121,41 +128,55 @@ int NumBridged(const MonoRun& run) {
       }));
 }
 
-// The fast preset, seed 2: at frame 105 a jerk breaks the tracks (48 kept), and the frames after
-// it see almost no mapped landmark (4 of them) until the new tracks are triangulated. Frame 107
-// is placed by the two-view geometry with the last keyframe (ba.mono_bridge), the next keyframes
-// map the new tracks, and the run goes on in the same map: 2 frames lost. Without the bridge
-// frames 105-116 are lost and a new map starts from frame 117 with its scale guessed across the
-// gap, 17 % off (1.02 m).
-TEST(MonoE2e, AJerkThatBreaksTheTracksIsBridged) {
-  const MonoRun run = RunFast200(2);
-  ASSERT_TRUE(run.eval.ok) << run.eval.error;
-  EXPECT_LE(run.lost_after, 2);
-  const int bridged = NumBridged(run);
-  EXPECT_GE(bridged, 1);
-  std::cout << "[ measured ] ba/mono fast seed 2: Sim(3) ATE " << run.eval.ate.translation.rmse
-            << " m, " << run.lost_after << " frames lost, " << bridged << " bridged" << std::endl;
-  testing::ExpectWithinBound("ba/mono fast 200 seed 2 (a jerk), Sim(3) ATE",
-                             run.eval.ate.translation.rmse, kJerkAteMetresBest, "m");
+// The fast preset's heading wobbles (up to 1.5 rad/s) turn the camera further than the
+// constant velocity foresees; the map-predicted frame-to-frame matching then keeps far unmapped
+// points and loses the mapped ones (seed 7, frame 90: 86 inliers, 2 of them mapped out of 53).
+// Matched again without a prior, the frame keeps its map (frontend.cc, TrackFromPrevious). Two
+// seeds that lost the map before (seed 7: 11 frames, a new map and 0.63 m; seed 4: a bridged
+// keyframe whose scale ran away, 3.6 m, then 0.38 m with the bridge's prior): no frame lost,
+// and the scale along the path within 10 %.
+TEST(MonoE2e, AJerkKeepsTheMap) {
+  for (const auto& [seed, best] : {std::pair<uint64_t, double>{4, kJerkSeed4AteMetresBest},
+                                   std::pair<uint64_t, double>{7, kJerkSeed7AteMetresBest}}) {
+    const MonoRun run = RunFast200(seed);
+    ASSERT_TRUE(run.eval.ok) << run.eval.error;
+    EXPECT_EQ(run.lost_after, 0) << "seed " << seed;
+    const ScaleAlongPath scale = MeasureScaleAlongPath(run.eval);
+    std::cout << "[ measured ] ba/mono fast 200 seed " << seed << ": Sim(3) ATE "
+              << run.eval.ate.translation.rmse << " m, " << run.lost_after
+              << " frames lost, scale along the path " << scale.min << " to " << scale.max
+              << std::endl;
+    EXPECT_GT(scale.min, 0.9) << "seed " << seed;
+    EXPECT_LT(scale.max, 1.1) << "seed " << seed;
+    testing::ExpectWithinBound(
+        "ba/mono fast 200 seed " + std::to_string(seed) + " (jerks), Sim(3) ATE",
+        run.eval.ate.translation.rmse, best, "m");
+  }
 }
 
-// The fast preset's seed 4 jerks at frame 190: the frame sees 5 mapped landmarks and is bridged
-// from the last keyframe (0.9 units, the last speed). Its tracks all new, it becomes a keyframe
-// that shares almost nothing with the window but the new landmarks it starts with the keyframe
-// before; without the bridge's relative pose as a prior (SlidingWindowBa::AddRelativePosePrior)
-// the window solve moved it 9 units and its new map took a scale 3.1x the old one's (ATE
-// 3.61 m). With it: the scale along the path stays within 0.963-1.055.
-TEST(MonoE2e, ABridgedKeyframeKeepsTheScale) {
-  const MonoRun run = RunFast200(4);
+// Eight frames dropped (fast seed 2, frames 60-67: 8 m and a turn in 0.9 s): the frame after the
+// gap sees too few mapped landmarks to be placed by them and is placed by its two-view geometry
+// with the last keyframe (ba.mono_bridge), the step's length from the last speed. It becomes a
+// keyframe whose new tracks only it and that keyframe see, and the bridge's relative pose stays
+// a prior of the window solves (SlidingWindowBa::AddRelativePosePrior) so that the window cannot
+// move it and its new landmarks by a similarity of their own (fast seed 4 before the frontend
+// kept its map: 3.1x the scale, 3.61 m without the prior). No frame lost, the scale along the
+// path within 10 %.
+TEST(MonoE2e, AGapThatBreaksTheTracksIsBridged) {
+  const MonoRun run = RunFast200(2, 60, 8);
   ASSERT_TRUE(run.eval.ok) << run.eval.error;
-  EXPECT_GE(NumBridged(run), 1);
+  EXPECT_LE(run.lost_after, 1);
+  const int bridged = NumBridged(run);
+  EXPECT_GE(bridged, 1);
   const ScaleAlongPath scale = MeasureScaleAlongPath(run.eval);
-  std::cout << "[ measured ] ba/mono fast seed 4: Sim(3) ATE " << run.eval.ate.translation.rmse
-            << " m, scale along the path " << scale.min << " to " << scale.max << std::endl;
+  std::cout << "[ measured ] ba/mono fast 200 seed 2 without frames 60-67: Sim(3) ATE "
+            << run.eval.ate.translation.rmse << " m, " << run.lost_after << " frames lost, "
+            << bridged << " bridged, scale along the path " << scale.min << " to " << scale.max
+            << std::endl;
   EXPECT_GT(scale.min, 0.9);
   EXPECT_LT(scale.max, 1.1);
-  testing::ExpectWithinBound("ba/mono fast 200 seed 4 (a bridged keyframe), Sim(3) ATE",
-                             run.eval.ate.translation.rmse, kBridgedScaleAteMetresBest, "m");
+  testing::ExpectWithinBound("ba/mono fast 200 seed 2 without frames 60-67 (bridged), Sim(3) ATE",
+                             run.eval.ate.translation.rmse, kGapBridgedAteMetresBest, "m");
 }
 
 // One camera started inside a turn (the rover loop's first bend, 1-2 deg of heading per frame):
