@@ -261,7 +261,8 @@ TwoViewOptions SlidingWindowEstimator::BridgeTwoViewOptions() const {
 }
 
 std::optional<Pose> SlidingWindowEstimator::BridgeFromLastKeyframe(const FrameMeasurement& m,
-                                                                   std::string* note) const {
+                                                                   std::string* note,
+                                                                   std::string* why_not) const {
   if (!options_.mono_bridge || !last_keyframe_.valid() || !last_tracked_ ||
       !keyframe_poses_.count(last_keyframe_)) {
     return std::nullopt;
@@ -274,8 +275,10 @@ std::optional<Pose> SlidingWindowEstimator::BridgeFromLastKeyframe(const FrameMe
       BridgeFromKeyframe(rig_.left, KeyframePoseNow(last_keyframe_), last_keyframe_observations_,
                          m, distance, BridgeTwoViewOptions(), &why);
   if (!bridge) {
-    VLOG(1) << "frame " << m.frame << ": no bridge from keyframe " << last_keyframe_ << ": "
-            << why;
+    std::ostringstream os;
+    os << ", no bridge from keyframe " << last_keyframe_ << " (" << why << ")";
+    *why_not += os.str();
+    VLOG(1) << "frame " << m.frame << os.str();
     return std::nullopt;
   }
   std::ostringstream os;
@@ -646,6 +649,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
   out.valid = first || (stereo && m.motion.has_value());
   if (T_w_start) out.note = "localised in the saved map";
 
+  std::string why_lost;  // Filled as each way of placing the frame fails.
   if (!first) {
     if (stereo && m.is_keyframe && m.loop && options_.loop.enable) {
       out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
@@ -661,6 +665,12 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
     if (r.status == PoseOnlyStatus::kOk) {
       T_w_c = r.T_w_c;
       out.valid = true;
+    } else if (!resumed) {
+      std::ostringstream why;
+      why << "lost: tracking against the window " << PoseOnlyStatusName(r.status) << " ("
+          << r.num_inliers << " inliers of " << mapped.size()
+          << " observations of mapped landmarks)";
+      why_lost = why.str();
     }
   }
   if (!out.valid && !first) {
@@ -668,17 +678,21 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& m) {
       T_w_c = *recovered;
       out.valid = true;
       relocalised_ = true;
+    } else {
+      why_lost += ", the PnP recovery on every mapped landmark failed";
     }
   }
   // A bridged frame: the keyframe it was bridged from and T_kf_cur (a prior if it becomes one).
   std::optional<std::pair<KeyframeId, Pose>> bridged_from;
   if (!out.valid && !first && !stereo) {
-    if (const std::optional<Pose> bridged = BridgeFromLastKeyframe(m, &out.note)) {
+    if (const std::optional<Pose> bridged = BridgeFromLastKeyframe(m, &out.note, &why_lost)) {
       T_w_c = *bridged;
       out.valid = true;
       bridged_from.emplace(last_keyframe_, KeyframePoseNow(last_keyframe_).inverse() * *bridged);
     }
   }
+  // Why a frame has no pose (report.json's note); a later note (a new map starts) replaces it.
+  if (!out.valid && !first && out.note.empty()) out.note = why_lost;
   // One camera: the loop closes from the tracked pose (the similarity moves it).
   if (!stereo && out.valid && m.is_keyframe && m.loop && options_.loop.enable) {
     out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c);

@@ -269,7 +269,9 @@ class SlidingWindowEstimator : public Estimator {
   // Mono, when neither pose-only tracking nor RecoverPose places m: its pose from the two-view
   // geometry with the last keyframe (backend/mono/keyframe_bridge.h), the step's length from the
   // last tracked speed; *note says so. nullopt when the pair fails the two-view tests.
-  std::optional<Pose> BridgeFromLastKeyframe(const FrameMeasurement& m, std::string* note) const;
+  // `note`: the bridged frame's note; `why_not`: appended with the reason when there is none.
+  std::optional<Pose> BridgeFromLastKeyframe(const FrameMeasurement& m, std::string* note,
+                                             std::string* why_not) const;
   // The two-view tests of a bridge (mono_init's, with fewer points).
   TwoViewOptions BridgeTwoViewOptions() const;
   // Mono: keyframe `id` (frame m) is the last one; its observations are the candidates for new

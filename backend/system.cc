@@ -102,7 +102,9 @@ TrackResult System::Track(const Frame& frame) {
   FrameStats s;
   s.frame = frame.id;
   s.t_ns = frame.t_ns;
-  s.status = e.initializing ? TrackingStatus::kInitializing : m.status;
+  // A frame the estimator could not place is lost, whatever the frontend's motion said.
+  s.status = e.initializing ? TrackingStatus::kInitializing
+                            : (e.valid ? m.status : TrackingStatus::kLost);
   s.valid = e.valid;
   s.note = e.note;
   s.keyframe = m.is_keyframe;

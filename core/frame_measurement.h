@@ -37,7 +37,8 @@ struct FeatureObservation {
 enum class TrackingStatus {
   kInitializing,  // First frame (or first after a reset): no motion yet.
   kTracking,      // Motion estimated from enough inliers.
-  kLost,          // Too few matches or a degenerate motion: no motion estimate this frame.
+  kLost,          // Too few matches or a degenerate motion: no motion estimate this frame; in
+                  // System's stats and TrackResult also a frame the estimator could not place.
 };
 const char* TrackingStatusName(TrackingStatus status);
 

@@ -37,6 +37,8 @@ struct MonoRun {
   int initialising = 0;  // Frames seen before the map existed.
   int first_pose = -1;   // Index of the frame whose Track first returned a valid pose.
   int lost_after = 0;    // Frames without a valid estimate after that.
+  // Of them, those not reported as lost with the reason (status kLost, a note "lost...").
+  int lost_without_reason = 0;
   std::vector<std::string> notes;
   std::map<int64_t, bool> keyframe;  // By timestamp: the frame became a keyframe.
 };
@@ -59,7 +61,11 @@ MonoRun RunFrames(const StereoRig& rig, size_t frames, const NextFrame& next, co
     run.keyframe[system.stats().back().t_ns] = system.stats().back().keyframe && r.valid;
     if (r.status == TrackingStatus::kInitializing && !r.valid) ++run.initialising;
     if (r.valid && run.first_pose < 0) run.first_pose = static_cast<int>(i);
-    if (run.first_pose >= 0 && !r.valid) ++run.lost_after;
+    if (run.first_pose >= 0 && !r.valid) {
+      ++run.lost_after;
+      run.lost_without_reason += r.status != TrackingStatus::kLost ||
+                                 run.notes.back().rfind("lost", 0) != 0;
+    }
   }
   run.trajectory = system.trajectory();
   EvalOptions eval;
@@ -319,6 +325,7 @@ TEST(MonoE2e, TrackingResumesInTheSameMapAfterBlackFrames) {
   ASSERT_TRUE(run.eval.ok) << run.eval.error;
   EXPECT_GE(run.lost_after, 3);
   EXPECT_LE(run.lost_after, 5);
+  EXPECT_EQ(run.lost_without_reason, 0);  // report.json says why each has no pose.
   const double fraction = run.eval.ate.translation.rmse / seq.PathLength();
   std::cout << "[ measured ] ba/mono rover 100 frames with 3 black ones: lost " << run.lost_after
             << ", Sim(3) ATE " << 100 * fraction << " % of the path" << std::endl;
