@@ -195,7 +195,8 @@ EstimatorOutput MonoEkfEstimator::AddBeforeInitialization(const FrameMeasurement
   note.precision(3);
   note << "initialised from frame " << init->reference.frame << " (" << state_.num_landmarks()
        << " of " << init->p_ref.size() << " points, " << TwoViewModelName(init->two_view.model)
-       << ", median parallax " << init->two_view.median_parallax_deg << " deg)";
+       << (init->magsac ? " (MAGSAC++)" : "") << ", median parallax "
+       << init->two_view.median_parallax_deg << " deg)";
   out.note = note.str();
   return out;
 }

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "backend/mono/two_view_refinement.h"
+#include "backend/mono/refined_two_view.h"
 
 namespace dala {
 
@@ -21,21 +21,20 @@ std::optional<KeyframeBridge> BridgeFromKeyframe(
     uv_kf.push_back(it->second.uv);
     uv_cur.push_back(o.uv);
   }
-  TwoViewResult pair = InitializeTwoView(camera, uv_kf, uv_cur, options);
-  if (!pair.ok) {
-    if (why) *why = pair.reason;
+  const RefinedTwoView pair = SolveRefinedTwoView(camera, uv_kf, uv_cur, options, true);
+  if (!pair.two_view.ok) {
+    if (why) *why = pair.two_view.reason;
     return std::nullopt;
   }
-  Pose T_cur_kf = pair.T_cur_ref;  // |t| = 1.
-  std::vector<std::optional<Eigen::Vector3d>> points = pair.p_ref;
-  RefineTwoView(camera, uv_kf, uv_cur, options.sigma_px, 20, &T_cur_kf, &points);
+  const Pose& T_cur_kf = pair.T_cur_ref;  // |t| = 1.
+  const std::vector<std::optional<Eigen::Vector3d>>& points = pair.p_ref;
   Pose T_kf_cur = T_cur_kf.inverse();
   T_kf_cur.translation() *= distance;
   KeyframeBridge bridge;
   bridge.T_w_cur = T_w_kf * T_kf_cur;
   bridge.num_points = static_cast<int>(
       std::count_if(points.begin(), points.end(), [](const auto& p) { return p.has_value(); }));
-  bridge.median_parallax_deg = pair.median_parallax_deg;
+  bridge.median_parallax_deg = pair.two_view.median_parallax_deg;
   return bridge;
 }
 

@@ -7,13 +7,14 @@
 //
 //   T_w_cur = T_w_kf * T_kf_cur,   T_kf_cur = (R, distance * t_dir),
 //
-// with R and the direction t_dir from InitializeTwoView (backend/mono/two_view.h: the caller's
-// tests, the map's first pair's with fewer points, so a weak pair is refused) on the landmarks
-// both observe, refined by the two-view BA, and the distance the caller's guess (the last speed
-// times the time since the keyframe: the one thing the pair cannot tell). Without it such a
-// frame is lost, the next keyframe cannot be added (a mono keyframe needs a pose), the new
-// tracks are never triangulated, and after ba.mono_reinit_after_lost_frames a new map starts
-// with its scale and heading guessed across the whole gap. Bridged, the scale is guessed across
+// with R and the direction t_dir from SolveRefinedTwoView (backend/mono/refined_two_view.h:
+// InitializeTwoView with the caller's tests, the map's first pair's with fewer points, so a weak
+// pair is refused, then the two-view BA) on the landmarks both observe, and the distance the
+// caller's guess (the last speed times the time since the keyframe: the one thing the pair
+// cannot tell). Without it such a frame is lost, the next keyframe cannot be added (a mono
+// keyframe needs a pose), the new tracks are never triangulated, and after
+// ba.mono_reinit_after_lost_frames a new map starts with its scale and heading guessed across
+// the whole gap. Bridged, the scale is guessed across
 // one step and the next keyframe triangulates the new tracks with the keyframe; a bridged frame
 // made a keyframe keeps T_kf_cur as a prior in the window (BridgeInformation below).
 

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "backend/mono/two_view_refinement.h"
+#include "backend/mono/refined_two_view.h"
 
 namespace dala {
 
@@ -79,23 +79,16 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
     return start_reference(os.str());
   }
 
-  TwoViewResult two_view = InitializeTwoView(camera_, uv_ref, uv_cur, options_.two_view);
-  if (!two_view.ok) {
-    reason_ = two_view.reason + " (reference frame " + std::to_string(reference_->frame.value) +
-              ", " + std::to_string(ids.size()) + " tracks, " + TwoViewModelName(two_view.model) +
-              ")";
+  RefinedTwoView solved =
+      SolveRefinedTwoView(camera_, uv_ref, uv_cur, options_.two_view, options_.refine);
+  if (!solved.two_view.ok) {
+    reason_ = solved.two_view.reason + " (reference frame " +
+              std::to_string(reference_->frame.value) + ", " + std::to_string(ids.size()) +
+              " tracks, " + TwoViewModelName(solved.two_view.model) + ")";
     between_.push_back(m);
     return std::nullopt;
   }
-  Pose T_cur_ref = two_view.T_cur_ref;
-  std::vector<std::optional<Eigen::Vector3d>> p_ref = two_view.p_ref;
-  if (options_.refine) {
-    const TwoViewRefinementSummary s = RefineTwoView(
-        camera_, uv_ref, uv_cur, options_.two_view.sigma_px, 20, &T_cur_ref, &p_ref);
-    VLOG(1) << "two-view refinement: cost " << s.initial_cost << " -> " << s.final_cost << ", "
-            << s.num_points << " points, " << s.num_dropped << " dropped"
-            << (s.usable ? "" : " (not usable: kept the unrefined reconstruction)");
-  }
+  const std::vector<std::optional<Eigen::Vector3d>>& p_ref = solved.p_ref;
   const int good = static_cast<int>(std::count_if(p_ref.begin(), p_ref.end(),
                                                   [](const auto& p) { return p.has_value(); }));
   if (good < options_.two_view.min_points) {
@@ -108,11 +101,12 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
   init.reference = std::move(*reference_);
   init.between = std::move(between_);
   init.current = m;
-  init.T_ref_cur = T_cur_ref.inverse();
+  init.T_ref_cur = solved.T_cur_ref.inverse();
   for (size_t i = 0; i < ids.size(); ++i) {
     if (p_ref[i]) init.p_ref[ids[i]] = *p_ref[i];
   }
-  init.two_view = std::move(two_view);
+  init.two_view = std::move(solved.two_view);
+  init.magsac = solved.magsac;
   Reset();
   reason_ = "initialised";
   return init;

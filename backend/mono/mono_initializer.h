@@ -16,7 +16,8 @@
 // On success: the reference frame (world frame = its camera), the frames in between (which the
 // estimator localises afterwards against the new map) and the current frame with
 // T_ref_cur (|t| = 1: the map's unit is this first baseline) and the triangulated landmarks
-// p_ref, refined by a two-view bundle adjustment (backend/mono/two_view_refinement.h).
+// p_ref, refined by a two-view bundle adjustment, the essential matrix sampled twice
+// (backend/mono/refined_two_view.h).
 //
 // Not thread-safe; deterministic.
 
@@ -48,6 +49,7 @@ struct MonoInitialization {
   Pose T_ref_cur = Pose::Identity();      // |translation| = 1.
   std::map<LandmarkId, Eigen::Vector3d> p_ref;  // Landmarks in the reference camera.
   TwoViewResult two_view;
+  bool magsac = false;  // The motion is MAGSAC++'s (backend/mono/refined_two_view.h).
 };
 
 class MonoInitializer {

@@ -234,8 +234,11 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   const double th_h = options.sigma_px * std::sqrt(kChi2Dof2);
   cv::theRNG().state = options.seed;
   cv::Mat mask_e, mask_h;
-  const cv::Mat E_cv = cv::findEssentialMat(a, b, K_cv, cv::RANSAC, options.ransac_confidence,
-                                            th_e, options.ransac_max_iterations, mask_e);
+  const int e_method = options.essential_sampler == TwoViewOptions::EssentialSampler::kMagsac
+                           ? cv::USAC_MAGSAC
+                           : cv::RANSAC;
+  const cv::Mat E_cv = cv::findEssentialMat(a, b, K_cv, e_method, options.ransac_confidence, th_e,
+                                            options.ransac_max_iterations, mask_e);
   cv::theRNG().state = options.seed;
   const cv::Mat H_cv = cv::findHomography(a, b, cv::RANSAC, th_h, mask_h,
                                           options.ransac_max_iterations,
@@ -307,6 +310,8 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   }
   result.num_good = best.num_good;
   result.median_parallax_deg = best.median_parallax_deg;
+  result.T_cur_ref = best.T_cur_ref;  // Also when the tests below refuse the pair.
+  result.has_motion = best.T_cur_ref.translation().norm() > 0.0;  // A Reconstruct ran.
   // A pure rotation first (see ResidualParallaxDeg), then too little parallax: the usual causes
   // of too few triangulated points.
   result.residual_parallax_deg = ResidualParallaxDeg(camera, uv_ref, uv_cur, inlier);
@@ -331,9 +336,16 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
     return result;
   }
   result.ok = true;
-  result.T_cur_ref = best.T_cur_ref;
   result.p_ref = std::move(best.p_ref);
   return result;
+}
+
+double EpipolarScore(const PinholeCamera& camera, const Pose& T_cur_ref,
+                     const std::vector<Eigen::Vector2d>& uv_ref,
+                     const std::vector<Eigen::Vector2d>& uv_cur, double sigma_px) {
+  const Eigen::Matrix3d K_inv = camera.K().inverse();
+  const Eigen::Matrix3d E = Skew(T_cur_ref.translation()) * T_cur_ref.linear();
+  return ScoreEssential(K_inv.transpose() * E * K_inv, uv_ref, uv_cur, 1.0 / (sigma_px * sigma_px));
 }
 
 }  // namespace dala

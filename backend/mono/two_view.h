@@ -57,6 +57,11 @@ namespace dala {
 
 struct TwoViewOptions {
   double sigma_px = 1.0;          // Pixel noise of the correspondences.
+  // Step 1's sampler of the essential matrix: RANSAC keeps the model with the most
+  // correspondences within the threshold; MAGSAC++ (OpenCV's USAC) weighs every correspondence by
+  // its likelihood over noise scales. MonoInitializer tries both (see there).
+  enum class EssentialSampler { kRansac, kMagsac };
+  EssentialSampler essential_sampler = EssentialSampler::kRansac;
   double ransac_confidence = 0.999;
   int ransac_max_iterations = 1000;
   uint64_t seed = 42;
@@ -79,7 +84,10 @@ struct TwoViewResult {
   std::string reason;  // Why not, when !ok.
   TwoViewModel model = TwoViewModel::kNone;
   double homography_score_ratio = 0.0;  // R_H.
-  Pose T_cur_ref = Pose::Identity();    // |translation| = 1 when ok.
+  // |translation| = 1. Set when ok, and when the pair is refused after a motion was recovered
+  // (by the pure-rotation, parallax, spread or point-count tests of steps 5-6: has_motion).
+  Pose T_cur_ref = Pose::Identity();
+  bool has_motion = false;
   // Per correspondence: the triangulated point in the reference camera, when good.
   std::vector<std::optional<Eigen::Vector3d>> p_ref;
   int num_inliers = 0;  // Of the chosen model's RANSAC.
@@ -93,6 +101,13 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
                                 const std::vector<Eigen::Vector2d>& uv_ref,
                                 const std::vector<Eigen::Vector2d>& uv_cur,
                                 const TwoViewOptions& options);
+
+// Step 2's score S_E of the epipolar geometry of a relative pose (F = K^-T [t]x R K^-1) over all
+// correspondences, with sigma = sigma_px: higher is better; compares motions on the same data
+// whatever model or sampler gave them.
+double EpipolarScore(const PinholeCamera& camera, const Pose& T_cur_ref,
+                     const std::vector<Eigen::Vector2d>& uv_ref,
+                     const std::vector<Eigen::Vector2d>& uv_cur, double sigma_px);
 
 }  // namespace dala
 
