@@ -20,7 +20,7 @@
 // both land in one basin (directions of travel within kDistinctMotionDeg: 0.02-1.6 deg apart
 // over 38 pairs, KITTI 06 from ten starts and 28 rendered starts) RANSAC's is kept: their motions
 // differ by noise, and taking the other sampler's inliers would only reshuffle which landmarks
-// start the map (on KITTI that alone moves a start's ATE by up to 2x: docs/monocular.md). Where
+// start the map (on KITTI that alone moves a start's ATE by up to 2x: docs/results.md). Where
 // they are two solutions:
 //   - MAGSAC++'s reconstruction passes the tests and its refined motion has the better epipolar
 //     score S_E over every correspondence (EpipolarScore): MAGSAC++'s is kept (`magsac`);
