@@ -14,9 +14,9 @@
 // cannot tell). Without it such a frame is lost, the next keyframe cannot be added (a mono
 // keyframe needs a pose), the new tracks are never triangulated, and after
 // ba.mono_reinit_after_lost_frames a new map starts with its scale and heading guessed across
-// the whole gap. Bridged, the scale is guessed across
-// one step and the next keyframe triangulates the new tracks with the keyframe; a bridged frame
-// made a keyframe keeps T_kf_cur as a prior in the window (BridgeInformation below).
+// the whole gap. Bridged, the scale is guessed across one step and the next keyframe
+// triangulates the new tracks with the keyframe; a bridged frame made a keyframe keeps T_kf_cur
+// as a prior in the window (BridgeInformation below).
 
 #include <map>
 #include <optional>

@@ -30,15 +30,13 @@ RefinedTwoView Solve(const PinholeCamera& camera, const std::vector<Eigen::Vecto
   return r;
 }
 
-// Angle between the directions of travel of two unit-baseline motions (the camera centre of the
-// current view in the reference frame is -R^T t).
+}  // namespace
+
 double TravelAngleDeg(const Pose& a, const Pose& b) {
   const Eigen::Vector3d ca = -(a.linear().transpose() * a.translation()).normalized();
   const Eigen::Vector3d cb = -(b.linear().transpose() * b.translation()).normalized();
   return std::acos(std::clamp(ca.dot(cb), -1.0, 1.0)) * 180.0 / M_PI;
 }
-
-}  // namespace
 
 RefinedTwoView SolveRefinedTwoView(const PinholeCamera& camera,
                                    const std::vector<Eigen::Vector2d>& uv_ref,
@@ -52,13 +50,8 @@ RefinedTwoView SolveRefinedTwoView(const PinholeCamera& camera,
   if (!magsac.two_view.has_motion) return ransac;
   const Pose& T_magsac = magsac.two_view.ok ? magsac.T_cur_ref : magsac.two_view.T_cur_ref;
   const double angle = TravelAngleDeg(ransac.T_cur_ref, T_magsac);
-  const double score_ransac =
-      EpipolarScore(camera, ransac.T_cur_ref, uv_ref, uv_cur, options.sigma_px);
-  const double score_magsac = EpipolarScore(camera, T_magsac, uv_ref, uv_cur, options.sigma_px);
-  VLOG(1) << "two-view samplers: epipolar score RANSAC " << score_ransac << ", MAGSAC++ "
-          << score_magsac
-          << (magsac.two_view.ok ? "" : " (refused: " + magsac.two_view.reason + ")")
-          << ", directions " << angle << " deg apart";
+  VLOG(1) << "two-view samplers: directions " << angle << " deg apart"
+          << (magsac.two_view.ok ? "" : ", MAGSAC++ refused: " + magsac.two_view.reason);
   if (angle <= kDistinctMotionDeg) return ransac;
   if (!magsac.two_view.ok) {
     // Two motions fit and the second cannot be reconstructed: wait for a wider pair.
@@ -71,6 +64,11 @@ RefinedTwoView SolveRefinedTwoView(const PinholeCamera& camera,
     refused.two_view.reason = why.str();
     return refused;
   }
+  const double score_ransac =
+      EpipolarScore(camera, ransac.T_cur_ref, uv_ref, uv_cur, options.sigma_px);
+  const double score_magsac = EpipolarScore(camera, T_magsac, uv_ref, uv_cur, options.sigma_px);
+  VLOG(1) << "two-view samplers: epipolar score RANSAC " << score_ransac << ", MAGSAC++ "
+          << score_magsac;
   if (score_magsac > score_ransac) {
     magsac.magsac = true;
     return magsac;

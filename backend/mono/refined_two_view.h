@@ -51,6 +51,10 @@ struct RefinedTwoView {
 // Directions of travel further apart than this are two solutions, not one solution's noise.
 inline constexpr double kDistinctMotionDeg = 10.0;
 
+// Angle between the directions of travel of two unit-baseline motions T_cur_ref (the current
+// camera's centre in the reference camera, -R^T t), degrees.
+double TravelAngleDeg(const Pose& a, const Pose& b);
+
 // refine = false: the reconstructions are compared unrefined. Not ok: InitializeTwoView's reason,
 // or "two motions fit: ..." (above).
 RefinedTwoView SolveRefinedTwoView(const PinholeCamera& camera,
