@@ -330,6 +330,13 @@ class SlidingWindowEstimator : public Estimator {
   void RefineWaitingFrames(bool all);
   // One of them (a frame whose new tracking fails keeps its pose).
   void RefineFrame(const WaitingFrame& waiting);
+  // Landmark fusion (SlidingWindowBa::FuseLandmarks, before each window solve): the newer id of
+  // each merged pair is renamed to the surviving one in everything the estimator keeps, and in
+  // every later measurement (the frontend goes on tracking the point under the newer id).
+  void RenameFused(const std::vector<std::pair<LandmarkId, LandmarkId>>& fused);
+  // m with fused ids renamed (a frame that holds both ids of a pair keeps the renamed track's
+  // observation: the other is the local map's guess at the same point).
+  FrameMeasurement WithFusedIds(const FrameMeasurement& m) const;
   // Blocks until a background window solve has finished (no-op when none is running).
   void WaitForWindowSolve() const { solver_.Wait(); }
   // A stereo rig whose disparity offset is calibrated online (ba.calibrate_disparity_offset, not
@@ -375,6 +382,9 @@ class SlidingWindowEstimator : public Estimator {
   std::vector<Sim3Edge> mono_loop_edges_;  // One camera: the same, in the current units.
   // One camera: old landmarks a loop that was not closed relabelled (see Add).
   std::set<LandmarkId> unconfirmed_loop_landmarks_;
+  // Landmark fusion: each merged id -> the id that survived it (see RenameFused), and back.
+  std::map<LandmarkId, LandmarkId> fused_into_;
+  std::multimap<LandmarkId, LandmarkId> fused_from_;
   Pose T_w_prev_ = Pose::Identity();
   Pose velocity_ = Pose::Identity();  // T_prev_cur of the last frame.
   // Mono: the initializer until the map exists, and every observation of the last keyframe

@@ -209,6 +209,8 @@ void VisitBa(SlidingWindowEstimatorOptions* b, OptionVisitor* v) {
   v->Field("ba", "cull_held_keyframes", &b->cull_held_keyframes);
   v->Field("ba", "refine_frames", &b->refine_frames);
   v->Field("ba", "mono_bridge", &b->mono_bridge);
+  // Landmark fusion (SlidingWindowBa::FuseLandmarks), off: docs/monocular.md "Landmark fusion".
+  v->Field("ba", "fuse_radius_px", &b->ba.fuse_radius_px);
   v->Field("ba", "final_ba_max_iterations", &b->global_ba.max_num_iterations);
   VisitLandmarkExit(&b->ba.landmark_exit, v);
   v->Field("ba", "pose_only_max_solver_time_in_seconds", &b->pose_only.max_solver_time_in_seconds);

@@ -57,6 +57,7 @@ bool SlidingWindowBa::Options::IsValid(std::string* why) const {
     return fail("min_triangulation_parallax_deg must be > 0");
   }
   if (!(min_depth > 0.0)) return fail("min_depth must be > 0");
+  if (!(fuse_radius_px >= 0.0)) return fail("fuse_radius_px must be >= 0 (0: no fusion)");
   if (!(prior_eigenvalue_floor > 0.0 && prior_eigenvalue_floor < 1.0)) {
     return fail("prior_eigenvalue_floor must be in (0, 1)");
   }

@@ -62,6 +62,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <ceres/loss_function.h>
@@ -152,6 +153,9 @@ class SlidingWindowBa {
     double min_triangulation_parallax_deg = 1;  // mono triangulation of new landmarks.
     double min_depth = 0.05;  // metres; an observation of a point closer (or behind) is an outlier.
     double prior_eigenvalue_floor = 1e-8;  // relative; see marginalization.h.
+    // Landmark fusion (FuseLandmarks): the search radius around a landmark's projection in the
+    // newest keyframe (pixels); 0: off.
+    double fuse_radius_px = 0.0;
 
     bool IsValid(std::string* why) const;
   };
@@ -215,6 +219,19 @@ class SlidingWindowBa {
   // from only, so the solve can move it and its new landmarks with a similarity of their own.
   void AddRelativePosePrior(KeyframeId a, KeyframeId b, const Pose& T_a_b,
                             const Matrix6d& information);
+
+  // Landmark fusion (ORB-SLAM's fuse): a point whose track broke and restarted under a new id
+  // is one landmark with two ids, each seen by a few keyframes, so the scale and the depth it
+  // carries are split between two short tracks. A landmark with a position that the newest
+  // keyframe does not observe is projected there (at the keyframe's current estimate); the
+  // nearest observation of another landmark with a position within options.fuse_radius_px is
+  // its candidate twin (nearest pairs first, each landmark in one pair). The two are merged
+  // when no window or held keyframe observes both and one point explains every view of both
+  // (at least 3): triangulated from all of them (DLT), each observation passes the outlier test
+  // (chi-square 95 %) in front of its camera. The older id survives with every observation of
+  // both and the joint triangulation as its position; the newer id is forgotten. Returns the
+  // merged pairs (newer id, surviving id); the caller renames the newer id in what it keeps.
+  std::vector<std::pair<LandmarkId, LandmarkId>> FuseLandmarks();
 
   // Optimises the window: solve, reject outliers, re-solve.
   Summary Optimize();
