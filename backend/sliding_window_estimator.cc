@@ -464,8 +464,7 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
                            "last speed: scale and heading across the gap are guesses) "
                          : "initialised ")
        << "from frame " << init->reference.frame << " (" << init->p_ref.size() << " points, "
-       << TwoViewModelName(init->two_view.model) << (init->magsac ? " (MAGSAC++)" : "")
-       << ", median parallax " << init->two_view.median_parallax_deg << " deg)";
+       << init->ModelName() << ", median parallax " << init->two_view.median_parallax_deg << " deg)";
   out.note = note.str();
   VLOG(1) << "frame " << m.frame << ": " << out.note;
   return out;

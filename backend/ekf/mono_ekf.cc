@@ -194,9 +194,8 @@ EstimatorOutput MonoEkfEstimator::AddBeforeInitialization(const FrameMeasurement
   std::ostringstream note;
   note.precision(3);
   note << "initialised from frame " << init->reference.frame << " (" << state_.num_landmarks()
-       << " of " << init->p_ref.size() << " points, " << TwoViewModelName(init->two_view.model)
-       << (init->magsac ? " (MAGSAC++)" : "") << ", median parallax "
-       << init->two_view.median_parallax_deg << " deg)";
+       << " of " << init->p_ref.size() << " points, " << init->ModelName()
+       << ", median parallax " << init->two_view.median_parallax_deg << " deg)";
   out.note = note.str();
   return out;
 }

@@ -22,6 +22,10 @@ bool MonoInitializerOptions::IsValid(std::string* why) const {
   return true;
 }
 
+std::string MonoInitialization::ModelName() const {
+  return std::string(TwoViewModelName(two_view.model)) + (magsac ? " (MAGSAC++)" : "");
+}
+
 MonoInitializer::MonoInitializer(const PinholeCamera& camera,
                                  const MonoInitializerOptions& options)
     : camera_(camera), options_(options) {

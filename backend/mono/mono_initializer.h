@@ -50,6 +50,10 @@ struct MonoInitialization {
   std::map<LandmarkId, Eigen::Vector3d> p_ref;  // Landmarks in the reference camera.
   TwoViewResult two_view;
   bool magsac = false;  // The motion is MAGSAC++'s (backend/mono/refined_two_view.h).
+
+  // The model and the sampler that gave the motion, for notes: "essential", "homography",
+  // "essential (MAGSAC++)".
+  std::string ModelName() const;
 };
 
 class MonoInitializer {

@@ -16,8 +16,9 @@
 // run's first metres (Sim(3) ATE 0.30 m over 100 frames). MAGSAC++ (OpenCV's USAC), which weighs
 // every correspondence by its likelihood over noise scales, finds the true basin there.
 //
-// The choice: when RANSAC's model is an essential matrix, MAGSAC++'s is solved as well. Where
-// both land in one basin (directions of travel within kDistinctMotionDeg: 0.02-1.6 deg apart
+// The choice: when RANSAC's model is an essential matrix, MAGSAC++'s is solved as well (and
+// refined only when it is a distinct solution, to be scored). Where both land in one basin
+// (directions of travel within kDistinctMotionDeg, MAGSAC++'s unrefined: 0.02-1.6 deg apart
 // over 38 pairs, KITTI 06 from ten starts and 28 rendered starts) RANSAC's is kept: their motions
 // differ by noise, and taking the other sampler's inliers would only reshuffle which landmarks
 // start the map (on KITTI that alone moves a start's ATE by up to 2x: docs/results.md). Where

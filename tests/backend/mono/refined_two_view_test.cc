@@ -8,11 +8,11 @@
 
 #include <cmath>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <string>
 
 #include "backend/mono/two_view_refinement.h"
+#include "tests/backend/mono/two_view_scene.h"
 
 namespace dala {
 namespace {
@@ -107,19 +107,7 @@ TEST(RefinedTwoView, AnOrdinaryPairKeepsRansacsMotionBitForBit) {
   const PinholeCamera camera = KittiGeometryCamera();
   const Pose T_cur_ref =
       MakePose(ExpSO3(Eigen::Vector3d(0.02, -0.08, 0.01)), Eigen::Vector3d(-0.5, 0.05, -0.2));
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(0, camera.width - 1), v(0, camera.height - 1),
-      z(4.0, 12.0);
-  std::normal_distribution<double> noise(0.0, 0.5);
-  Pair pair;
-  while (pair.ref.size() < 300) {
-    const Eigen::Vector2d uv(u(rng), v(rng));
-    const Eigen::Vector3d p_ref = camera.Unproject(uv) * z(rng);
-    Eigen::Vector2d uv_cur;
-    if (!camera.Project(T_cur_ref * p_ref, &uv_cur) || !camera.InImage(uv_cur)) continue;
-    pair.ref.push_back(uv + Eigen::Vector2d(noise(rng), noise(rng)));
-    pair.cur.push_back(uv_cur + Eigen::Vector2d(noise(rng), noise(rng)));
-  }
+  const testing::TwoViews pair = testing::RenderTwoViews(camera, T_cur_ref, false, 0.5, 3);
   const TwoViewResult ransac = InitializeTwoView(camera, pair.ref, pair.cur, TwoViewOptions());
   ASSERT_TRUE(ransac.ok) << ransac.reason;
   Pose T_ransac = ransac.T_cur_ref;

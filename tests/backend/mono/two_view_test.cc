@@ -7,9 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <random>
 
 #include "backend/mono/two_view_refinement.h"
+#include "tests/backend/mono/two_view_scene.h"
 
 namespace dala {
 namespace {
@@ -24,30 +24,10 @@ PinholeCamera Camera() {
   return c;
 }
 
-struct Views {
-  std::vector<Eigen::Vector2d> ref, cur;
-  std::vector<Eigen::Vector3d> p_ref;
-};
+using Views = testing::TwoViews;
 
-// Points in front of the reference camera (depth 4..12 m, or on the plane z = 6 when planar),
-// seen from the reference and from T_cur_ref, with Gaussian pixel noise.
 Views Render(const Pose& T_cur_ref, bool planar, double noise_px, uint32_t seed, int n = 300) {
-  const PinholeCamera cam = Camera();
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1),
-      z(4.0, 12.0);
-  std::normal_distribution<double> noise(0.0, noise_px);
-  Views out;
-  while (static_cast<int>(out.ref.size()) < n) {
-    const Eigen::Vector2d uv(u(rng), v(rng));
-    const Eigen::Vector3d p = cam.Unproject(uv) * (planar ? 6.0 : z(rng));
-    Eigen::Vector2d uv_cur;
-    if (!cam.Project(T_cur_ref * p, &uv_cur) || !cam.InImage(uv_cur)) continue;
-    out.ref.push_back(uv + Eigen::Vector2d(noise(rng), noise(rng)));
-    out.cur.push_back(uv_cur + Eigen::Vector2d(noise(rng), noise(rng)));
-    out.p_ref.push_back(p);
-  }
-  return out;
+  return testing::RenderTwoViews(Camera(), T_cur_ref, planar, noise_px, seed, n);
 }
 
 double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
