@@ -26,6 +26,29 @@ std::string MonoInitialization::ModelName() const {
   return std::string(TwoViewModelName(two_view.model)) + (magsac ? " (MAGSAC++)" : "");
 }
 
+int MonoInitializer::Correspond(const FrameMeasurement& reference, const FrameMeasurement& m,
+                                std::vector<Eigen::Vector2d>* uv_ref,
+                                std::vector<Eigen::Vector2d>* uv_cur,
+                                std::vector<LandmarkId>* ids) {
+  std::unordered_map<LandmarkId, size_t> in_reference;
+  for (size_t i = 0; i < reference.observations.size(); ++i) {
+    in_reference.emplace(reference.observations[i].landmark, i);
+  }
+  if (uv_ref) uv_ref->clear();
+  if (uv_cur) uv_cur->clear();
+  if (ids) ids->clear();
+  int n = 0;
+  for (const FeatureObservation& o : m.observations) {
+    const auto it = in_reference.find(o.landmark);
+    if (it == in_reference.end()) continue;
+    ++n;
+    if (uv_ref) uv_ref->push_back(reference.observations[it->second].uv);
+    if (uv_cur) uv_cur->push_back(o.uv);
+    if (ids) ids->push_back(o.landmark);
+  }
+  return n;
+}
+
 MonoInitializer::MonoInitializer(const PinholeCamera& camera,
                                  const MonoInitializerOptions& options)
     : camera_(camera), options_(options) {
@@ -37,6 +60,40 @@ void MonoInitializer::Reset() {
   reference_.reset();
   between_.clear();
   reason_.clear();
+}
+
+std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasurement& reference,
+                                                           const FrameMeasurement& m,
+                                                           std::string* why_not) const {
+  std::vector<Eigen::Vector2d> uv_ref, uv_cur;
+  std::vector<LandmarkId> ids;
+  Correspond(reference, m, &uv_ref, &uv_cur, &ids);
+  RefinedTwoView solved =
+      SolveRefinedTwoView(camera_, uv_ref, uv_cur, options_.two_view, options_.refine);
+  if (!solved.two_view.ok) {
+    *why_not = solved.two_view.reason + " (reference frame " +
+               std::to_string(reference.frame.value) + ", " + std::to_string(ids.size()) +
+               " tracks, " + TwoViewModelName(solved.two_view.model) + ")";
+    return std::nullopt;
+  }
+  const std::vector<std::optional<Eigen::Vector3d>>& p_ref = solved.p_ref;
+  const int good = static_cast<int>(std::count_if(p_ref.begin(), p_ref.end(),
+                                                  [](const auto& p) { return p.has_value(); }));
+  if (good < options_.two_view.min_points) {
+    *why_not = "too few points after the two-view refinement: " + std::to_string(good) + " < " +
+               std::to_string(options_.two_view.min_points);
+    return std::nullopt;
+  }
+  MonoInitialization init;
+  init.reference = reference;
+  init.current = m;
+  init.T_ref_cur = solved.T_cur_ref.inverse();
+  for (size_t i = 0; i < ids.size(); ++i) {
+    if (p_ref[i]) init.p_ref[ids[i]] = *p_ref[i];
+  }
+  init.two_view = std::move(solved.two_view);
+  init.magsac = solved.magsac;
+  return init;
 }
 
 std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m) {
@@ -54,26 +111,39 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
     reason_ = os.str();
     return std::nullopt;
   };
+  const auto initialised = [&](MonoInitialization init) {
+    Reset();
+    reason_ = "initialised";
+    return std::optional<MonoInitialization>(std::move(init));
+  };
   if (!reference_) return start_reference("");
 
-  // Correspondences: the landmarks the reference and the current frame both observe.
-  std::unordered_map<LandmarkId, size_t> in_reference;
-  for (size_t i = 0; i < reference_->observations.size(); ++i) {
-    in_reference.emplace(reference_->observations[i].landmark, i);
-  }
-  std::vector<Eigen::Vector2d> uv_ref, uv_cur;
-  std::vector<LandmarkId> ids;
-  for (const FeatureObservation& o : m.observations) {
-    const auto it = in_reference.find(o.landmark);
-    if (it == in_reference.end()) continue;
-    uv_ref.push_back(reference_->observations[it->second].uv);
-    uv_cur.push_back(o.uv);
-    ids.push_back(o.landmark);
-  }
-  if (static_cast<int>(ids.size()) < options_.two_view.min_points) {
+  const int shared = Correspond(*reference_, m, nullptr, nullptr, nullptr);
+  if (shared < options_.two_view.min_points) {
     std::ostringstream os;
-    os << "lost the reference frame " << reference_->frame << " (" << ids.size()
-       << " tracks left)";
+    os << "lost the reference frame " << reference_->frame << " (" << shared << " tracks left)";
+    // Before the current frame becomes the reference: the oldest frame since then that still
+    // shares a reference's worth of landmarks (min_reference_features) with it is tried as the
+    // reference of this frame (the widest baseline left), and kept if the pair initialises
+    // now. Moving fast forward, a reference loses its tracks within two or three frames while
+    // one frame of motion has too little parallax; a frame between then still has both. A pair
+    // that does not initialise at once is not kept: the current frame, with all its tracks, is
+    // the better reference for the next frames.
+    for (size_t k = 0; k < between_.size(); ++k) {
+      if (Correspond(between_[k], m, nullptr, nullptr, nullptr) <
+          options_.min_reference_features) {
+        continue;
+      }
+      std::string why_not;
+      std::optional<MonoInitialization> init = TryPair(between_[k], m, &why_not);
+      if (init) {
+        init->between.assign(std::make_move_iterator(between_.begin() + k + 1),
+                             std::make_move_iterator(between_.end()));
+        return initialised(std::move(*init));
+      }
+      os << "; frame " << between_[k].frame << " as the reference: " << why_not;
+      break;
+    }
     return start_reference(os.str());
   }
   if (static_cast<int>(between_.size()) >= options_.max_pending_frames) {
@@ -82,38 +152,13 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
        << reference_->frame;
     return start_reference(os.str());
   }
-
-  RefinedTwoView solved =
-      SolveRefinedTwoView(camera_, uv_ref, uv_cur, options_.two_view, options_.refine);
-  if (!solved.two_view.ok) {
-    reason_ = solved.two_view.reason + " (reference frame " +
-              std::to_string(reference_->frame.value) + ", " + std::to_string(ids.size()) +
-              " tracks, " + TwoViewModelName(solved.two_view.model) + ")";
+  std::optional<MonoInitialization> init = TryPair(*reference_, m, &reason_);
+  if (!init) {
     between_.push_back(m);
     return std::nullopt;
   }
-  const std::vector<std::optional<Eigen::Vector3d>>& p_ref = solved.p_ref;
-  const int good = static_cast<int>(std::count_if(p_ref.begin(), p_ref.end(),
-                                                  [](const auto& p) { return p.has_value(); }));
-  if (good < options_.two_view.min_points) {
-    reason_ = "too few points after the two-view refinement: " + std::to_string(good) + " < " +
-              std::to_string(options_.two_view.min_points);
-    between_.push_back(m);
-    return std::nullopt;
-  }
-  MonoInitialization init;
-  init.reference = std::move(*reference_);
-  init.between = std::move(between_);
-  init.current = m;
-  init.T_ref_cur = solved.T_cur_ref.inverse();
-  for (size_t i = 0; i < ids.size(); ++i) {
-    if (p_ref[i]) init.p_ref[ids[i]] = *p_ref[i];
-  }
-  init.two_view = std::move(solved.two_view);
-  init.magsac = solved.magsac;
-  Reset();
-  reason_ = "initialised";
-  return init;
+  init->between = std::move(between_);
+  return initialised(std::move(*init));
 }
 
 }  // namespace dala

@@ -11,7 +11,11 @@
 // is replaced by the current frame when fewer than two_view.min_points of its landmarks are
 // still tracked (the two-view test could never pass), or when it is older than
 // max_pending_frames (the motion stayed too small for too long); the frames before the new
-// reference then stay without a pose.
+// reference then stay without a pose. When the reference's tracks are gone, the oldest frame
+// since then that shares at least min_reference_features landmarks with the current frame is
+// tried first as the current frame's reference, and initialises the map if that pair passes
+// (moving fast forward, a reference loses its tracks within two or three frames while a
+// frame's motion alone has too little parallax).
 //
 // On success: the reference frame (world frame = its camera), the frames in between (which the
 // estimator localises afterwards against the new map) and the current frame with
@@ -68,6 +72,16 @@ class MonoInitializer {
   void Reset();
 
  private:
+  // The landmarks `reference` and `m` both observe: their pixels and ids (each output may be
+  // null); returns their number.
+  static int Correspond(const FrameMeasurement& reference, const FrameMeasurement& m,
+                        std::vector<Eigen::Vector2d>* uv_ref, std::vector<Eigen::Vector2d>* uv_cur,
+                        std::vector<LandmarkId>* ids);
+  // The two-view initialisation of the pair (reference, m) (`between` left empty); nullopt
+  // with *why_not when the pair fails its tests.
+  std::optional<MonoInitialization> TryPair(const FrameMeasurement& reference,
+                                            const FrameMeasurement& m, std::string* why_not) const;
+
   PinholeCamera camera_;
   MonoInitializerOptions options_;
   std::optional<FrameMeasurement> reference_;

@@ -17,15 +17,7 @@
 namespace dala {
 namespace {
 
-PinholeCamera KittiGeometryCamera() {
-  PinholeCamera c;
-  c.width = 1226;
-  c.height = 370;
-  c.fx = c.fy = 707.0;
-  c.cx = 612.5;
-  c.cy = 184.5;
-  return c;
-}
+using testing::KittiGeometryCamera;
 
 struct Pair {
   std::vector<Eigen::Vector2d> ref, cur;

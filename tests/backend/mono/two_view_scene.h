@@ -13,6 +13,17 @@
 
 namespace dala::testing {
 
+// A camera of KITTI's geometry (1226 x 370, f = 707 px).
+inline PinholeCamera KittiGeometryCamera() {
+  PinholeCamera c;
+  c.width = 1226;
+  c.height = 370;
+  c.fx = c.fy = 707.0;
+  c.cx = 612.5;
+  c.cy = 184.5;
+  return c;
+}
+
 struct TwoViews {
   std::vector<Eigen::Vector2d> ref, cur;
   std::vector<Eigen::Vector3d> p_ref;

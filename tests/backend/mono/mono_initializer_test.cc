@@ -1,0 +1,95 @@
+// MonoInitializer's choice of reference frame: when the reference's tracks are gone, the oldest
+// frame since then that shares a reference's worth of tracks with the current one is tried as
+// its reference, and kept if the pair initialises at once.
+
+#include "backend/mono/mono_initializer.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "tests/backend/mono/two_view_scene.h"
+
+namespace dala {
+namespace {
+
+using testing::KittiGeometryCamera;
+
+// Points 4-15 m in front of the first camera; frame f observes the points of `ids`, from the
+// camera at z_m along the optical axis (noise-free pixels).
+class ForwardDrive {
+ public:
+  ForwardDrive() {
+    const PinholeCamera cam = KittiGeometryCamera();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1), z(4, 15);
+    for (int i = 0; i < 600; ++i) points_.push_back(cam.Unproject({u(rng), v(rng)}) * z(rng));
+  }
+
+  FrameMeasurement Frame(int f, double z_m, const std::vector<std::pair<int, int>>& ids) const {
+    const PinholeCamera cam = KittiGeometryCamera();
+    FrameMeasurement m;
+    m.frame = FrameId(f);
+    m.t_ns = static_cast<int64_t>(f) * 100000000;
+    for (const auto& [first, last] : ids) {
+      for (int i = first; i < last; ++i) {
+        Eigen::Vector2d uv;
+        const Eigen::Vector3d p_c = points_[i] - Eigen::Vector3d(0, 0, z_m);
+        if (!cam.Project(p_c, &uv) || !cam.InImage(uv)) continue;
+        FeatureObservation o;
+        o.landmark = LandmarkId(i);
+        o.uv = uv;
+        m.observations.push_back(o);
+      }
+    }
+    return m;
+  }
+
+ private:
+  std::vector<Eigen::Vector3d> points_;
+};
+
+TEST(MonoInitializer, AFrameBetweenInitialisesWhenTheReferencesTracksAreGone) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), MonoInitializerOptions());
+  // Frame 0: points 0-199. Frame 1, 0.05 m on (a pair too weak to start from): 80 of them and
+  // 200 new.
+  // Frame 2, 1.5 m on: 30 of frame 0's (its tracks are gone), 150 of frame 1's new ones.
+  EXPECT_FALSE(init.Add(drive.Frame(0, 0.0, {{0, 200}})));
+  EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
+  EXPECT_NE(init.reason().find("reference frame 0"), std::string::npos) << init.reason();
+  const std::optional<MonoInitialization> result =
+      init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 350}, {400, 600}}));
+  ASSERT_TRUE(result) << init.reason();
+  EXPECT_EQ(result->reference.frame, FrameId(1));
+  EXPECT_TRUE(result->between.empty());
+  EXPECT_EQ(result->current.frame, FrameId(2));
+  EXPECT_GE(result->p_ref.size(), 100u);  // Of the 150 tracks from frame 1.
+}
+
+TEST(MonoInitializer, TheCurrentFrameIsTheNewReferenceWhenNoFrameBetweenReachesIt) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), MonoInitializerOptions());
+  EXPECT_FALSE(init.Add(drive.Frame(0, 0.0, {{0, 200}})));
+  EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
+  // Frame 2 keeps 30 of frame 0's points and 30 of frame 1's: no pair can be tried.
+  EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 230}, {400, 600}})));
+  EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos)
+      << init.reason();
+}
+
+TEST(MonoInitializer, AFrameBetweenThatDoesNotInitialiseNowIsNotKept) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), MonoInitializerOptions());
+  EXPECT_FALSE(init.Add(drive.Frame(0, 0.0, {{0, 200}})));
+  EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
+  // Frame 2 shares 150 points with frame 1 but has moved only 0.03 m from it.
+  EXPECT_FALSE(init.Add(drive.Frame(2, 0.08, {{50, 80}, {200, 350}, {400, 600}})));
+  EXPECT_NE(init.reason().find("frame 1 as the reference: "), std::string::npos) << init.reason();
+  EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos)
+      << init.reason();
+}
+
+}  // namespace
+}  // namespace dala
