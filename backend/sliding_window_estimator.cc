@@ -304,87 +304,6 @@ void SlidingWindowEstimator::ReportLandmarks(EstimatorOutput* out) const {
   }
 }
 
-void SlidingWindowEstimator::RenameFused(
-    const std::vector<std::pair<LandmarkId, LandmarkId>>& fused) {
-  for (const auto& [loser, survivor] : fused) {
-    // Ids that had fused into the loser now lead to the survivor.
-    const auto [first, last] = fused_from_.equal_range(loser);
-    std::vector<LandmarkId> earlier;
-    for (auto it = first; it != last; ++it) earlier.push_back(it->second);
-    fused_from_.erase(loser);
-    for (const LandmarkId e : earlier) {
-      fused_into_[e] = survivor;
-      fused_from_.emplace(survivor, e);
-    }
-    fused_into_[loser] = survivor;
-    fused_from_.emplace(survivor, loser);
-
-    if (const auto n = landmark_observations_.find(loser); n != landmark_observations_.end()) {
-      landmark_observations_[survivor] += n->second;
-      landmark_observations_.erase(n);
-    }
-    if (const auto a = anchor_.find(loser); a != anchor_.end()) {
-      anchor_.emplace(survivor, a->second);
-      anchor_.erase(a);
-    }
-    map_points_.erase(loser);
-    const auto rename = [&](std::map<LandmarkId, BaObservation>* seen) {
-      const auto it = seen->find(loser);
-      if (it == seen->end()) return;
-      BaObservation o = it->second;
-      seen->erase(it);
-      o.landmark = survivor;
-      seen->emplace(survivor, o);
-    };
-    rename(&last_keyframe_observations_);
-    for (auto& [kf, seen] : earlier_keyframe_observations_) rename(&seen);
-    for (WaitingFrame& w : waiting_frames_) {
-      const bool has_survivor =
-          std::any_of(w.observations.begin(), w.observations.end(),
-                      [&](const BaObservation& o) { return o.landmark == survivor; });
-      for (BaObservation& o : w.observations) {
-        if (o.landmark == loser) o.landmark = survivor;
-      }
-      if (has_survivor) {
-        // Keep one observation of the survivor (the first).
-        bool kept = false;
-        w.observations.erase(std::remove_if(w.observations.begin(), w.observations.end(),
-                                            [&](const BaObservation& o) {
-                                              if (o.landmark != survivor) return false;
-                                              if (!kept) return !(kept = true);
-                                              return true;
-                                            }),
-                             w.observations.end());
-      }
-    }
-    for (auto& [kf, o] : observation_archive_) {
-      if (o.landmark == loser) o.landmark = survivor;
-    }
-  }
-}
-
-FrameMeasurement SlidingWindowEstimator::WithFusedIds(const FrameMeasurement& m) const {
-  FrameMeasurement out = m;
-  std::set<LandmarkId> renamed;
-  for (FeatureObservation& o : out.observations) {
-    const auto it = fused_into_.find(o.landmark);
-    if (it == fused_into_.end()) continue;
-    o.landmark = it->second;
-    renamed.insert(it->second);
-  }
-  if (renamed.empty()) return out;
-  std::vector<FeatureObservation> kept;
-  kept.reserve(out.observations.size());
-  for (size_t i = 0; i < out.observations.size(); ++i) {
-    const FeatureObservation& o = out.observations[i];
-    const bool was_renamed = fused_into_.count(m.observations[i].landmark) > 0;
-    if (!was_renamed && renamed.count(o.landmark)) continue;
-    kept.push_back(o);
-  }
-  out.observations = std::move(kept);
-  return out;
-}
-
 Pose SlidingWindowEstimator::PredictPose(const FrameMeasurement& m) const {
   Pose velocity = velocity_;
   if (m.motion) {
@@ -464,7 +383,8 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
                            "last speed: scale and heading across the gap are guesses) "
                          : "initialised ")
        << "from frame " << init->reference.frame << " (" << init->p_ref.size() << " points, "
-       << init->ModelName() << ", median parallax " << init->two_view.median_parallax_deg << " deg)";
+       << init->ModelName() << ", median parallax " << init->two_view.median_parallax_deg
+       << " deg)";
   out.note = note.str();
   VLOG(1) << "frame " << m.frame << ": " << out.note;
   return out;
@@ -696,7 +616,9 @@ bool SlidingWindowEstimator::OutsideWindow(const FrameMeasurement& m) const {
 
 EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement) {
   WaitForWindowSolve();
-  const FrameMeasurement renamed = fused_into_.empty() ? FrameMeasurement() : WithFusedIds(measurement);
+  // Landmark fusion renamed some of the frontend's ids (RenameFused).
+  const FrameMeasurement renamed =
+      fused_into_.empty() ? FrameMeasurement() : WithFusedIds(measurement);
   const FrameMeasurement& m = fused_into_.empty() ? measurement : renamed;
   if (solved_in_background_) {
     T_w_prev_ = keyframe_poses_.at(*solved_in_background_);

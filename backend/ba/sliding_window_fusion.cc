@@ -138,8 +138,8 @@ std::vector<std::pair<LandmarkId, LandmarkId>> SlidingWindowBa::FuseLandmarks() 
     }
   }
   for (const auto& [loser, survivor] : merged) landmarks_.erase(loser);
-  VLOG(2) << "keyframe " << newest.id << ": " << merged.size() << " landmarks fused of " << candidates.size()
-          << " candidates";
+  VLOG(2) << "keyframe " << newest.id << ": " << merged.size() << " landmarks fused of "
+          << candidates.size() << " candidates";
   return merged;
 }
 

@@ -49,8 +49,7 @@ int MonoInitializer::Correspond(const FrameMeasurement& reference, const FrameMe
   return n;
 }
 
-MonoInitializer::MonoInitializer(const PinholeCamera& camera,
-                                 const MonoInitializerOptions& options)
+MonoInitializer::MonoInitializer(const PinholeCamera& camera, const MonoInitializerOptions& options)
     : camera_(camera), options_(options) {
   std::string why;
   CHECK(options_.IsValid(&why)) << why;
@@ -77,8 +76,8 @@ std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasuremen
     return std::nullopt;
   }
   const std::vector<std::optional<Eigen::Vector3d>>& p_ref = solved.p_ref;
-  const int good = static_cast<int>(std::count_if(p_ref.begin(), p_ref.end(),
-                                                  [](const auto& p) { return p.has_value(); }));
+  const int good = static_cast<int>(
+      std::count_if(p_ref.begin(), p_ref.end(), [](const auto& p) { return p.has_value(); }));
   if (good < options_.two_view.min_points) {
     *why_not = "too few points after the two-view refinement: " + std::to_string(good) + " < " +
                std::to_string(options_.two_view.min_points);
@@ -130,8 +129,7 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
     // that does not initialise at once is not kept: the current frame, with all its tracks, is
     // the better reference for the next frames.
     for (size_t k = 0; k < between_.size(); ++k) {
-      if (Correspond(between_[k], m, nullptr, nullptr, nullptr) <
-          options_.min_reference_features) {
+      if (Correspond(between_[k], m, nullptr, nullptr, nullptr) < options_.min_reference_features) {
         continue;
       }
       std::string why_not;

@@ -40,8 +40,8 @@ namespace dala {
 struct MonoInitializerOptions {
   TwoViewOptions two_view;
   int min_reference_features = 100;
-  int max_pending_frames = 60;        // Reference older than this: a new reference.
-  bool refine = true;                 // Two-view BA of the accepted reconstruction.
+  int max_pending_frames = 60;  // Reference older than this: a new reference.
+  bool refine = true;           // Two-view BA of the accepted reconstruction.
 
   bool IsValid(std::string* why) const;
 };
@@ -50,7 +50,7 @@ struct MonoInitialization {
   FrameMeasurement reference;
   std::vector<FrameMeasurement> between;  // After the reference, before the current frame.
   FrameMeasurement current;
-  Pose T_ref_cur = Pose::Identity();      // |translation| = 1.
+  Pose T_ref_cur = Pose::Identity();            // |translation| = 1.
   std::map<LandmarkId, Eigen::Vector3d> p_ref;  // Landmarks in the reference camera.
   TwoViewResult two_view;
   bool magsac = false;  // The motion is MAGSAC++'s (backend/mono/refined_two_view.h).

@@ -34,10 +34,9 @@ LandmarkId NearestLandmarkSeenByAll(const BaScene& scene, const std::vector<Land
     if (std::find(avoid.begin(), avoid.end(), id) != avoid.end()) continue;
     bool seen_by_all = true;
     for (const BaKeyframe& kf : scene.keyframes) {
-      seen_by_all = seen_by_all && std::any_of(kf.observations.begin(), kf.observations.end(),
-                                               [&](const BaObservation& o) {
-                                                 return o.landmark == id;
-                                               });
+      seen_by_all =
+          seen_by_all && std::any_of(kf.observations.begin(), kf.observations.end(),
+                                     [&](const BaObservation& o) { return o.landmark == id; });
     }
     const double d = (scene.T_w_c_gt[kNumKeyframes - 1].inverse() * scene.p_w_gt[j]).z();
     if (seen_by_all && d < best_distance) {
@@ -73,8 +72,7 @@ class LandmarkFusionTest : public ::testing::Test {
     }
     const Pose& T_w_last = scene_.T_w_c_gt[kNumKeyframes - 1];
     const Eigen::Vector3d p_occluded = scene_.p_w_gt[static_cast<size_t>(occluded_.value)];
-    const Eigen::Vector3d p_impostor =
-        T_w_last * (0.6 * (T_w_last.inverse() * p_occluded));
+    const Eigen::Vector3d p_impostor = T_w_last * (0.6 * (T_w_last.inverse() * p_occluded));
     for (int k = kBreak; k < kNumKeyframes; ++k) {
       BaObservation b;
       b.landmark = impostor_;
@@ -120,9 +118,9 @@ TEST_F(LandmarkFusionTest, ARestartedTrackIsMergedIntoItsOlderIdAndAnImpostorIsN
   EXPECT_EQ(fused[0].second, broken_);
   EXPECT_FALSE(ba.LandmarkPosition(restarted_));
   EXPECT_EQ(ba.ObservingKeyframes(broken_).size(), static_cast<size_t>(kNumKeyframes));
-  EXPECT_LT((*ba.LandmarkPosition(broken_) - scene_.p_w_gt[static_cast<size_t>(broken_.value)])
-                .norm(),
-            0.05);
+  EXPECT_LT(
+      (*ba.LandmarkPosition(broken_) - scene_.p_w_gt[static_cast<size_t>(broken_.value)]).norm(),
+      0.05);
   EXPECT_EQ(ba.ObservingKeyframes(impostor_).size(), static_cast<size_t>(kNumKeyframes - kBreak));
   // The merged landmark is solved with all its views.
   EXPECT_TRUE(ba.Optimize().usable);

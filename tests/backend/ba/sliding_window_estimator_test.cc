@@ -136,7 +136,9 @@ FusionRun RunWithBrokenTracks(double fuse_radius_px) {
       }
     }
     const EstimatorOutput out = estimator.Add(m);
-    if (frame > 0) EXPECT_TRUE(out.valid) << "frame " << frame << ": " << out.note;
+    if (frame > 0) {
+      EXPECT_TRUE(out.valid) << "frame " << frame << ": " << out.note;
+    }
   }
   FusionRun run;
   const std::vector<KeyframeId> window = estimator.ba().WindowKeyframes();

@@ -75,8 +75,7 @@ TEST(MonoInitializer, TheCurrentFrameIsTheNewReferenceWhenNoFrameBetweenReachesI
   EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
   // Frame 2 keeps 30 of frame 0's points and 30 of frame 1's: no pair can be tried.
   EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 230}, {400, 600}})));
-  EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos)
-      << init.reason();
+  EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos) << init.reason();
 }
 
 TEST(MonoInitializer, AFrameBetweenThatDoesNotInitialiseNowIsNotKept) {
@@ -87,8 +86,7 @@ TEST(MonoInitializer, AFrameBetweenThatDoesNotInitialiseNowIsNotKept) {
   // Frame 2 shares 150 points with frame 1 but has moved only 0.03 m from it.
   EXPECT_FALSE(init.Add(drive.Frame(2, 0.08, {{50, 80}, {200, 350}, {400, 600}})));
   EXPECT_NE(init.reason().find("frame 1 as the reference: "), std::string::npos) << init.reason();
-  EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos)
-      << init.reason();
+  EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos) << init.reason();
 }
 
 }  // namespace

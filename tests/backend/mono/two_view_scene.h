@@ -32,8 +32,7 @@ struct TwoViews {
 inline TwoViews RenderTwoViews(const PinholeCamera& cam, const Pose& T_cur_ref, bool planar,
                                double noise_px, uint32_t seed, int n = 300) {
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1),
-      z(4.0, 12.0);
+  std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1), z(4.0, 12.0);
   std::normal_distribution<double> noise(0.0, noise_px);
   TwoViews out;
   while (static_cast<int>(out.ref.size()) < n) {
