@@ -62,6 +62,8 @@ std::vector<std::pair<LandmarkId, LandmarkId>> SlidingWindowBa::FuseLandmarks() 
     const Eigen::Vector3d p_c = T_c_w * position->second;
     if (p_c.z() < options_.min_depth) continue;
     const Eigen::Vector2d uv(K_.fx * p_c.x() / p_c.z() + K_.cx, K_.fy * p_c.y() / p_c.z() + K_.cy);
+    // Far outside any image (and within the cells' int range): no observation near it.
+    if (!(uv.cwiseAbs().maxCoeff() < 1e6)) continue;
     const auto [cx, cy] = cell_of(uv);
     const BaObservation* nearest = nullptr;
     double nearest_distance = radius;
