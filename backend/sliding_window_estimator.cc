@@ -298,6 +298,7 @@ void SlidingWindowEstimator::ReportLandmarks(EstimatorOutput* out) const {
   out->landmarks_in_state = static_cast<int>(landmarks.size());
   out->local_map.assign(landmarks.begin(), landmarks.end());
   // The frontend tracks a fused point under its newer id: that id is in the local map too.
+  if (fused_from_.empty()) return;
   for (const auto& [id, p_w] : landmarks) {
     const auto [first, last] = fused_from_.equal_range(id);
     for (auto it = first; it != last; ++it) out->local_map.emplace_back(it->second, p_w);

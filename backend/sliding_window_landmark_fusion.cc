@@ -2,6 +2,7 @@
 // merged ids renamed in what the estimator keeps and in the frontend's later measurements.
 
 #include <algorithm>
+#include <map>
 #include <set>
 #include <utility>
 #include <vector>
@@ -12,7 +13,13 @@ namespace dala {
 
 void SlidingWindowEstimator::RenameFused(
     const std::vector<std::pair<LandmarkId, LandmarkId>>& fused) {
+  if (fused.empty()) return;
+  // Each landmark is in one pair at most (FuseLandmarks), so one pass renames them all.
+  std::map<LandmarkId, LandmarkId> survivor_of;
+  std::set<LandmarkId> survivors;
   for (const auto& [loser, survivor] : fused) {
+    survivor_of[loser] = survivor;
+    survivors.insert(survivor);
     // Ids that had fused into the loser now lead to the survivor.
     const auto [first, last] = fused_from_.equal_range(loser);
     std::vector<LandmarkId> earlier;
@@ -34,39 +41,37 @@ void SlidingWindowEstimator::RenameFused(
       anchor_.erase(a);
     }
     map_points_.erase(loser);
-    const auto rename = [&](std::map<LandmarkId, BaObservation>* seen) {
+  }
+  // A keyframe's observations by id: the loser's become the survivor's unless it has one.
+  const auto rename = [&](std::map<LandmarkId, BaObservation>* seen) {
+    for (const auto& [loser, survivor] : survivor_of) {
       const auto it = seen->find(loser);
-      if (it == seen->end()) return;
+      if (it == seen->end()) continue;
       BaObservation o = it->second;
       seen->erase(it);
       o.landmark = survivor;
       seen->emplace(survivor, o);
-    };
-    rename(&last_keyframe_observations_);
-    for (auto& [kf, seen] : earlier_keyframe_observations_) rename(&seen);
-    for (WaitingFrame& w : waiting_frames_) {
-      const bool has_survivor =
-          std::any_of(w.observations.begin(), w.observations.end(),
-                      [&](const BaObservation& o) { return o.landmark == survivor; });
-      for (BaObservation& o : w.observations) {
-        if (o.landmark == loser) o.landmark = survivor;
-      }
-      if (has_survivor) {
-        // The frame saw the point under both ids: one observation of it is kept (the first).
-        bool seen = false;
-        const auto is_duplicate = [&](const BaObservation& o) {
-          if (o.landmark != survivor) return false;
-          const bool duplicate = seen;
-          seen = true;
-          return duplicate;
-        };
-        w.observations.erase(
-            std::remove_if(w.observations.begin(), w.observations.end(), is_duplicate),
-            w.observations.end());
+    }
+  };
+  rename(&last_keyframe_observations_);
+  for (auto& [kf, seen] : earlier_keyframe_observations_) rename(&seen);
+  for (WaitingFrame& w : waiting_frames_) {
+    for (BaObservation& o : w.observations) {
+      if (const auto it = survivor_of.find(o.landmark); it != survivor_of.end()) {
+        o.landmark = it->second;
       }
     }
-    for (auto& [kf, o] : observation_archive_) {
-      if (o.landmark == loser) o.landmark = survivor;
+    // A frame that saw the point under both ids keeps one observation of it (the first).
+    std::set<LandmarkId> kept;
+    const auto is_duplicate = [&](const BaObservation& o) {
+      return survivors.count(o.landmark) > 0 && !kept.insert(o.landmark).second;
+    };
+    w.observations.erase(std::remove_if(w.observations.begin(), w.observations.end(), is_duplicate),
+                         w.observations.end());
+  }
+  for (auto& [kf, o] : observation_archive_) {
+    if (const auto it = survivor_of.find(o.landmark); it != survivor_of.end()) {
+      o.landmark = it->second;
     }
   }
 }

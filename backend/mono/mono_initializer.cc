@@ -26,27 +26,21 @@ std::string MonoInitialization::ModelName() const {
   return std::string(TwoViewModelName(two_view.model)) + (magsac ? " (MAGSAC++)" : "");
 }
 
-int MonoInitializer::Correspond(const FrameMeasurement& reference, const FrameMeasurement& m,
-                                std::vector<Eigen::Vector2d>* uv_ref,
-                                std::vector<Eigen::Vector2d>* uv_cur,
-                                std::vector<LandmarkId>* ids) {
+MonoInitializer::Correspondences MonoInitializer::Correspond(const FrameMeasurement& reference,
+                                                             const FrameMeasurement& m) {
   std::unordered_map<LandmarkId, size_t> in_reference;
   for (size_t i = 0; i < reference.observations.size(); ++i) {
     in_reference.emplace(reference.observations[i].landmark, i);
   }
-  if (uv_ref) uv_ref->clear();
-  if (uv_cur) uv_cur->clear();
-  if (ids) ids->clear();
-  int n = 0;
+  Correspondences c;
   for (const FeatureObservation& o : m.observations) {
     const auto it = in_reference.find(o.landmark);
     if (it == in_reference.end()) continue;
-    ++n;
-    if (uv_ref) uv_ref->push_back(reference.observations[it->second].uv);
-    if (uv_cur) uv_cur->push_back(o.uv);
-    if (ids) ids->push_back(o.landmark);
+    c.uv_ref.push_back(reference.observations[it->second].uv);
+    c.uv_cur.push_back(o.uv);
+    c.ids.push_back(o.landmark);
   }
-  return n;
+  return c;
 }
 
 MonoInitializer::MonoInitializer(const PinholeCamera& camera, const MonoInitializerOptions& options)
@@ -63,15 +57,13 @@ void MonoInitializer::Reset() {
 
 std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasurement& reference,
                                                            const FrameMeasurement& m,
+                                                           const Correspondences& c,
                                                            std::string* why_not) const {
-  std::vector<Eigen::Vector2d> uv_ref, uv_cur;
-  std::vector<LandmarkId> ids;
-  Correspond(reference, m, &uv_ref, &uv_cur, &ids);
   RefinedTwoView solved =
-      SolveRefinedTwoView(camera_, uv_ref, uv_cur, options_.two_view, options_.refine);
+      SolveRefinedTwoView(camera_, c.uv_ref, c.uv_cur, options_.two_view, options_.refine);
   if (!solved.two_view.ok) {
     *why_not = solved.two_view.reason + " (reference frame " +
-               std::to_string(reference.frame.value) + ", " + std::to_string(ids.size()) +
+               std::to_string(reference.frame.value) + ", " + std::to_string(c.ids.size()) +
                " tracks, " + TwoViewModelName(solved.two_view.model) + ")";
     return std::nullopt;
   }
@@ -87,8 +79,8 @@ std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasuremen
   init.reference = reference;
   init.current = m;
   init.T_ref_cur = solved.T_cur_ref.inverse();
-  for (size_t i = 0; i < ids.size(); ++i) {
-    if (p_ref[i]) init.p_ref[ids[i]] = *p_ref[i];
+  for (size_t i = 0; i < c.ids.size(); ++i) {
+    if (p_ref[i]) init.p_ref[c.ids[i]] = *p_ref[i];
   }
   init.two_view = std::move(solved.two_view);
   init.magsac = solved.magsac;
@@ -117,10 +109,11 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
   };
   if (!reference_) return start_reference("");
 
-  const int shared = Correspond(*reference_, m, nullptr, nullptr, nullptr);
-  if (shared < options_.two_view.min_points) {
+  const Correspondences with_reference = Correspond(*reference_, m);
+  if (static_cast<int>(with_reference.ids.size()) < options_.two_view.min_points) {
     std::ostringstream os;
-    os << "lost the reference frame " << reference_->frame << " (" << shared << " tracks left)";
+    os << "lost the reference frame " << reference_->frame << " (" << with_reference.ids.size()
+       << " tracks left)";
     // Before the current frame becomes the reference: the oldest frame since then that still
     // shares a reference's worth of landmarks (min_reference_features) with it is tried as the
     // reference of this frame (the widest baseline left), and kept if the pair initialises
@@ -129,11 +122,10 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
     // that does not initialise at once is not kept: the current frame, with all its tracks, is
     // the better reference for the next frames.
     for (size_t k = 0; k < between_.size(); ++k) {
-      if (Correspond(between_[k], m, nullptr, nullptr, nullptr) < options_.min_reference_features) {
-        continue;
-      }
+      const Correspondences with_frame = Correspond(between_[k], m);
+      if (static_cast<int>(with_frame.ids.size()) < options_.min_reference_features) continue;
       std::string why_not;
-      std::optional<MonoInitialization> init = TryPair(between_[k], m, &why_not);
+      std::optional<MonoInitialization> init = TryPair(between_[k], m, with_frame, &why_not);
       if (init) {
         init->between.assign(std::make_move_iterator(between_.begin() + k + 1),
                              std::make_move_iterator(between_.end()));
@@ -150,7 +142,7 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
        << reference_->frame;
     return start_reference(os.str());
   }
-  std::optional<MonoInitialization> init = TryPair(*reference_, m, &reason_);
+  std::optional<MonoInitialization> init = TryPair(*reference_, m, with_reference, &reason_);
   if (!init) {
     between_.push_back(m);
     return std::nullopt;

@@ -72,15 +72,17 @@ class MonoInitializer {
   void Reset();
 
  private:
-  // The landmarks `reference` and `m` both observe: their pixels and ids (each output may be
-  // null); returns their number.
-  static int Correspond(const FrameMeasurement& reference, const FrameMeasurement& m,
-                        std::vector<Eigen::Vector2d>* uv_ref, std::vector<Eigen::Vector2d>* uv_cur,
-                        std::vector<LandmarkId>* ids);
-  // The two-view initialisation of the pair (reference, m) (`between` left empty); nullopt
-  // with *why_not when the pair fails its tests.
+  // The landmarks `reference` and `m` both observe: their pixels in each and their ids.
+  struct Correspondences {
+    std::vector<Eigen::Vector2d> uv_ref, uv_cur;
+    std::vector<LandmarkId> ids;
+  };
+  static Correspondences Correspond(const FrameMeasurement& reference, const FrameMeasurement& m);
+  // The two-view initialisation of the pair (reference, m) on their correspondences c
+  // (`between` left empty); nullopt with *why_not when the pair fails its tests.
   std::optional<MonoInitialization> TryPair(const FrameMeasurement& reference,
-                                            const FrameMeasurement& m, std::string* why_not) const;
+                                            const FrameMeasurement& m, const Correspondences& c,
+                                            std::string* why_not) const;
 
   PinholeCamera camera_;
   MonoInitializerOptions options_;

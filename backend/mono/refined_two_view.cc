@@ -52,7 +52,7 @@ RefinedTwoView SolveRefinedTwoView(const PinholeCamera& camera,
   if (!ransac.two_view.ok || ransac.two_view.model != TwoViewModel::kEssential) return ransac;
   RefinedTwoView magsac =
       Solve(camera, uv_ref, uv_cur, options, TwoViewOptions::EssentialSampler::kMagsac);
-  if (!magsac.two_view.has_motion) return ransac;
+  if (!magsac.two_view.has_motion()) return ransac;
   // MAGSAC++'s motion before its refinement: the two agree (to 0.02-1.6 deg on every pair
   // measured) or are distinct solutions (69-72 deg apart), which refinement does not change;
   // only a distinct one is refined, to be scored.

@@ -311,7 +311,6 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   result.num_good = best.num_good;
   result.median_parallax_deg = best.median_parallax_deg;
   result.T_cur_ref = best.T_cur_ref;  // Also when the tests below refuse the pair.
-  result.has_motion = best.T_cur_ref.translation().norm() > 0.0;  // A Reconstruct ran.
   // A pure rotation first (see ResidualParallaxDeg), then too little parallax: the usual causes
   // of too few triangulated points.
   result.residual_parallax_deg = ResidualParallaxDeg(camera, uv_ref, uv_cur, inlier);

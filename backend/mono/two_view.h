@@ -85,9 +85,9 @@ struct TwoViewResult {
   TwoViewModel model = TwoViewModel::kNone;
   double homography_score_ratio = 0.0;  // R_H.
   // |translation| = 1. Set when ok, and when the pair is refused after a motion was recovered
-  // (by the pure-rotation, parallax, spread or point-count tests of steps 5-6: has_motion).
+  // (by the pure-rotation, parallax, spread or point-count tests of steps 5-6: has_motion()).
   Pose T_cur_ref = Pose::Identity();
-  bool has_motion = false;
+  bool has_motion() const { return T_cur_ref.translation().norm() > 0.0; }
   // Per correspondence: the triangulated point in the reference camera, when good.
   std::vector<std::optional<Eigen::Vector3d>> p_ref;
   int num_inliers = 0;  // Of the chosen model's RANSAC.

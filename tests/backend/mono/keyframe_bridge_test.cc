@@ -5,46 +5,32 @@
 
 #include <gtest/gtest.h>
 
-#include <random>
+#include "tests/backend/mono/two_view_scene.h"
 
 namespace dala {
 namespace {
 
-PinholeCamera Camera() {
-  PinholeCamera c;
-  c.width = 752;
-  c.height = 480;
-  c.fx = c.fy = 450.0;
-  c.cx = 375.5;
-  c.cy = 239.5;
-  return c;
-}
+PinholeCamera Camera() { return testing::EurocGeometryCamera(); }
 
 struct Scene {
   std::map<LandmarkId, BaObservation> keyframe;
   FrameMeasurement current;
 };
 
-// Points 4-12 m in front of the keyframe, seen from it and from T_w_cur, with 0.5 px noise.
+// Points 4-12 m in front of the keyframe, seen from it and from T_w_cur, with 0.5 px noise
+// (ids: the points' indices).
 Scene Render(const Pose& T_w_kf, const Pose& T_w_cur, int n = 300) {
-  const PinholeCamera cam = Camera();
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1), z(4, 12);
-  std::normal_distribution<double> noise(0.0, 0.5);
-  const Pose T_cur_kf = T_w_cur.inverse() * T_w_kf;
+  const testing::TwoViews views =
+      testing::RenderTwoViews(Camera(), T_w_cur.inverse() * T_w_kf, false, 0.5, 3, n);
   Scene scene;
-  for (uint64_t id = 0; static_cast<int>(scene.keyframe.size()) < n; ++id) {
-    const Eigen::Vector2d uv(u(rng), v(rng));
-    const Eigen::Vector3d p_kf = cam.Unproject(uv) * z(rng);
-    Eigen::Vector2d uv_cur;
-    if (!cam.Project(T_cur_kf * p_kf, &uv_cur) || !cam.InImage(uv_cur)) continue;
+  for (size_t i = 0; i < views.ref.size(); ++i) {
     BaObservation b;
-    b.landmark = LandmarkId(id);
-    b.uv = uv + Eigen::Vector2d(noise(rng), noise(rng));
+    b.landmark = LandmarkId(static_cast<int64_t>(i));
+    b.uv = views.ref[i];
     scene.keyframe[b.landmark] = b;
     FeatureObservation o;
     o.landmark = b.landmark;
-    o.uv = uv_cur + Eigen::Vector2d(noise(rng), noise(rng));
+    o.uv = views.cur[i];
     scene.current.observations.push_back(o);
   }
   return scene;

@@ -13,6 +13,17 @@
 
 namespace dala::testing {
 
+// A camera of EuRoC's image size (752 x 480, f = 450 px).
+inline PinholeCamera EurocGeometryCamera() {
+  PinholeCamera c;
+  c.width = 752;
+  c.height = 480;
+  c.fx = c.fy = 450.0;
+  c.cx = 375.5;
+  c.cy = 239.5;
+  return c;
+}
+
 // A camera of KITTI's geometry (1226 x 370, f = 707 px).
 inline PinholeCamera KittiGeometryCamera() {
   PinholeCamera c;

@@ -14,15 +14,7 @@
 namespace dala {
 namespace {
 
-PinholeCamera Camera() {
-  PinholeCamera c;
-  c.width = 752;
-  c.height = 480;
-  c.fx = c.fy = 450.0;
-  c.cx = 375.5;
-  c.cy = 239.5;
-  return c;
-}
+PinholeCamera Camera() { return testing::EurocGeometryCamera(); }
 
 using Views = testing::TwoViews;
 
