@@ -14,6 +14,7 @@
 #include "backend/ba/sliding_window_ba.h"
 #include "backend/sliding_window_estimator.h"
 #include "tests/backend/ba/ba_synthetic_scene.h"
+#include "tests/backend/ba/window_keyframe_poses.h"
 
 namespace dala {
 namespace {
@@ -38,9 +39,7 @@ double ScaleDrift(const SlidingWindowBa::Options& options, double pixel_noise, u
     kf.T_w_c = i < 2 ? scene.T_w_c_gt[i] : est[i - 1] * (est[i - 2].inverse() * est[i - 1]);
     ba.AddKeyframe(kf);
     EXPECT_TRUE(ba.Optimize().usable);
-    est.clear();
-    for (const auto& m : ba.marginalized_keyframes()) est.push_back(m.T_w_c);
-    for (KeyframeId id : ba.WindowKeyframes()) est.push_back(*ba.KeyframePose(id));
+    est = testing::AllKeyframePoses(ba);
   }
   const auto scale_of = [&](size_t from, size_t to) {
     double estimated = 0.0, truth = 0.0;

@@ -8,11 +8,13 @@
 #include <random>
 
 #include "tests/backend/ba/ba_synthetic_scene.h"
+#include "tests/backend/ba/window_keyframe_poses.h"
 
 namespace dala {
 namespace {
 
 using testing::AlignedAte;
+using testing::AllKeyframePoses;
 using testing::BaScene;
 using testing::BaSceneOptions;
 using testing::MakeBaScene;
@@ -28,13 +30,6 @@ std::vector<Pose> NoisyRelativeMotions(const BaScene& scene, unsigned seed) {
         PerturbPose(scene.T_w_c_gt[i - 1].inverse() * scene.T_w_c_gt[i], rng, 0.005, 0.03);
   }
   return T_prev_cur;
-}
-
-std::vector<Pose> AllKeyframePoses(const SlidingWindowBa& ba) {
-  std::vector<Pose> out;
-  for (const auto& m : ba.marginalized_keyframes()) out.push_back(m.T_w_c);
-  for (KeyframeId id : ba.WindowKeyframes()) out.push_back(*ba.KeyframePose(id));
-  return out;
 }
 
 // Feeds the scene keyframe by keyframe, optimising after each one (the online use).

@@ -21,14 +21,12 @@ using testing::KittiGeometryCamera;
 class ForwardDrive {
  public:
   ForwardDrive() {
-    const PinholeCamera cam = KittiGeometryCamera();
     std::mt19937 rng(5);
-    std::uniform_real_distribution<double> u(0, cam.width - 1), v(0, cam.height - 1), z(4, 15);
-    for (int i = 0; i < 600; ++i) points_.push_back(cam.Unproject({u(rng), v(rng)}) * z(rng));
+    std::uniform_real_distribution<double> u(0, cam_.width - 1), v(0, cam_.height - 1), z(4, 15);
+    for (int i = 0; i < 600; ++i) points_.push_back(cam_.Unproject({u(rng), v(rng)}) * z(rng));
   }
 
   FrameMeasurement Frame(int f, double z_m, const std::vector<std::pair<int, int>>& ids) const {
-    const PinholeCamera cam = KittiGeometryCamera();
     FrameMeasurement m;
     m.frame = FrameId(f);
     m.t_ns = static_cast<int64_t>(f) * 100000000;
@@ -36,7 +34,7 @@ class ForwardDrive {
       for (int i = first; i < last; ++i) {
         Eigen::Vector2d uv;
         const Eigen::Vector3d p_c = points_[i] - Eigen::Vector3d(0, 0, z_m);
-        if (!cam.Project(p_c, &uv) || !cam.InImage(uv)) continue;
+        if (!cam_.Project(p_c, &uv) || !cam_.InImage(uv)) continue;
         FeatureObservation o;
         o.landmark = LandmarkId(i);
         o.uv = uv;
@@ -47,18 +45,23 @@ class ForwardDrive {
   }
 
  private:
+  PinholeCamera cam_ = KittiGeometryCamera();
   std::vector<Eigen::Vector3d> points_;
 };
+
+// Frames 0 and 1 of every test: frame 0 sees points 0-199; frame 1, 0.05 m on (a pair too weak
+// to start from), 80 of them and 200 new. Neither initialises.
+void AddTheWeakPair(const ForwardDrive& drive, MonoInitializer* init) {
+  EXPECT_FALSE(init->Add(drive.Frame(0, 0.0, {{0, 200}})));
+  EXPECT_FALSE(init->Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
+}
 
 TEST(MonoInitializer, AFrameBetweenInitialisesWhenTheReferencesTracksAreGone) {
   const ForwardDrive drive;
   MonoInitializer init(KittiGeometryCamera(), MonoInitializerOptions());
-  // Frame 0: points 0-199. Frame 1, 0.05 m on (a pair too weak to start from): 80 of them and
-  // 200 new.
-  // Frame 2, 1.5 m on: 30 of frame 0's (its tracks are gone), 150 of frame 1's new ones.
-  EXPECT_FALSE(init.Add(drive.Frame(0, 0.0, {{0, 200}})));
-  EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
+  AddTheWeakPair(drive, &init);
   EXPECT_NE(init.reason().find("reference frame 0"), std::string::npos) << init.reason();
+  // Frame 2, 1.5 m on: 30 of frame 0's (its tracks are gone), 150 of frame 1's new ones.
   const std::optional<MonoInitialization> result =
       init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 350}, {400, 600}}));
   ASSERT_TRUE(result) << init.reason();
@@ -71,8 +74,7 @@ TEST(MonoInitializer, AFrameBetweenInitialisesWhenTheReferencesTracksAreGone) {
 TEST(MonoInitializer, TheCurrentFrameIsTheNewReferenceWhenNoFrameBetweenReachesIt) {
   const ForwardDrive drive;
   MonoInitializer init(KittiGeometryCamera(), MonoInitializerOptions());
-  EXPECT_FALSE(init.Add(drive.Frame(0, 0.0, {{0, 200}})));
-  EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
+  AddTheWeakPair(drive, &init);
   // Frame 2 keeps 30 of frame 0's points and 30 of frame 1's: no pair can be tried.
   EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 230}, {400, 600}})));
   EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos) << init.reason();
@@ -81,8 +83,7 @@ TEST(MonoInitializer, TheCurrentFrameIsTheNewReferenceWhenNoFrameBetweenReachesI
 TEST(MonoInitializer, AFrameBetweenThatDoesNotInitialiseNowIsNotKept) {
   const ForwardDrive drive;
   MonoInitializer init(KittiGeometryCamera(), MonoInitializerOptions());
-  EXPECT_FALSE(init.Add(drive.Frame(0, 0.0, {{0, 200}})));
-  EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 80}, {200, 400}})));
+  AddTheWeakPair(drive, &init);
   // Frame 2 shares 150 points with frame 1 but has moved only 0.03 m from it.
   EXPECT_FALSE(init.Add(drive.Frame(2, 0.08, {{50, 80}, {200, 350}, {400, 600}})));
   EXPECT_NE(init.reason().find("frame 1 as the reference: "), std::string::npos) << init.reason();

@@ -13,27 +13,23 @@
 
 namespace dala::testing {
 
-// A camera of EuRoC's image size (752 x 480, f = 450 px).
-inline PinholeCamera EurocGeometryCamera() {
+// A distortion-free camera of the given image size and focal length, its principal point at the
+// image centre (OpenCV pixel centres: ((width - 1) / 2, (height - 1) / 2)).
+inline PinholeCamera CentredCamera(int width, int height, double f) {
   PinholeCamera c;
-  c.width = 752;
-  c.height = 480;
-  c.fx = c.fy = 450.0;
-  c.cx = 375.5;
-  c.cy = 239.5;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = f;
+  c.cx = 0.5 * (width - 1);
+  c.cy = 0.5 * (height - 1);
   return c;
 }
 
+// A camera of EuRoC's image size (752 x 480, f = 450 px).
+inline PinholeCamera EurocGeometryCamera() { return CentredCamera(752, 480, 450.0); }
+
 // A camera of KITTI's geometry (1226 x 370, f = 707 px).
-inline PinholeCamera KittiGeometryCamera() {
-  PinholeCamera c;
-  c.width = 1226;
-  c.height = 370;
-  c.fx = c.fy = 707.0;
-  c.cx = 612.5;
-  c.cy = 184.5;
-  return c;
-}
+inline PinholeCamera KittiGeometryCamera() { return CentredCamera(1226, 370, 707.0); }
 
 struct TwoViews {
   std::vector<Eigen::Vector2d> ref, cur;
