@@ -12,7 +12,8 @@
 //   truth_noise=S     the same plus Gaussian noise of S px per coordinate (seeded by --seed);
 //   split_jumps=J     the frontend's pixels, a track cut into two landmarks where its distance
 //                     to its true point changes by more than J px from one keyframe to its next;
-//   drop_far=T        the frontend's pixels, those farther than T px from their true point left out.
+//   drop_far=T        the frontend's pixels, those farther than T px from their true point
+//                     left out.
 //
 // The window: SequenceBaOptions (`dala run`'s), every keyframe in the map's order, sigma 1 px;
 // the first two keyframes at the truth (the gauge and the scale), each later one started at the
