@@ -124,7 +124,7 @@ int ApplyMode(const Mode& mode, const StereoIntrinsics& K,
               const std::map<LandmarkId, Eigen::Vector3d>& p_true, unsigned seed,
               std::vector<ReplayKeyframe>* kfs, int* steps) {
   std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, mode.kind == Mode::kTruth ? mode.value : 0.0);
+  std::normal_distribution<double> noise(0.0, 1.0);
   // split_jumps: per track, its last offset from the true point and its current piece.
   std::map<LandmarkId, std::pair<Eigen::Vector2d, int>> piece;
   int64_t next_id = 0;
@@ -143,7 +143,12 @@ int ApplyMode(const Mode& mode, const StereoIntrinsics& K,
       const Eigen::Vector2d exact = Project(K, kf.T_w_c_true, it->second);
       const Eigen::Vector2d offset = o.uv - exact;
       if (mode.kind == Mode::kTruth) {
-        o.uv = exact + Eigen::Vector2d(noise(rng), noise(rng));
+        o.uv = exact;
+        if (mode.value > 0) {
+          const double du = noise(rng);  // in this order (argument order is unspecified).
+          const double dv = noise(rng);
+          o.uv += mode.value * Eigen::Vector2d(du, dv);
+        }
       } else if (mode.kind == Mode::kDropFar) {
         if (offset.norm() > mode.value) continue;
       } else {  // kSplitJumps
