@@ -38,6 +38,7 @@
 #include "core/error.h"
 #include "core/io/dataset.h"
 #include "core/io/map_file.h"
+#include "tests/backend/ba/window_keyframe_poses.h"
 
 namespace dala {
 namespace {
@@ -68,11 +69,6 @@ struct ReplayKeyframe {
   std::vector<BaObservation> observations;
 };
 
-Eigen::Vector2d Project(const StereoIntrinsics& K, const Pose& T_w_c, const Eigen::Vector3d& p_w) {
-  const Eigen::Vector3d q = T_w_c.inverse() * p_w;
-  return {K.fx * q.x() / q.z() + K.cx, K.fy * q.y() / q.z() + K.cy};
-}
-
 // The map's keyframes with their true poses (nearest ground-truth time, within 1 ms).
 std::vector<ReplayKeyframe> LoadKeyframes(const SavedMap& map, const Trajectory& truth) {
   std::vector<ReplayKeyframe> out;
@@ -100,7 +96,7 @@ std::vector<ReplayKeyframe> LoadKeyframes(const SavedMap& map, const Trajectory&
 }
 
 // Each track's point triangulated with the true poses (tracks of two or more keyframes whose
-// rays meet at 0.5 deg or more).
+// rays meet at 0.5 deg or more, in front of every camera by 0.05 m or more).
 std::map<LandmarkId, Eigen::Vector3d> TruePoints(const StereoIntrinsics& K,
                                                  const std::vector<ReplayKeyframe>& kfs) {
   std::map<LandmarkId, std::pair<std::vector<Pose>, std::vector<Eigen::Vector2d>>> views;
@@ -120,7 +116,7 @@ std::map<LandmarkId, Eigen::Vector3d> TruePoints(const StereoIntrinsics& K,
 
 // Rewrites the observations as the mode says. split_jumps: *steps counts a track's steps from
 // one of its keyframes to the next, and the return value those cut.
-int ApplyMode(const Mode& mode, const StereoIntrinsics& K,
+int ApplyMode(const Mode& mode, const PinholeCamera& camera,
               const std::map<LandmarkId, Eigen::Vector3d>& p_true, unsigned seed,
               std::vector<ReplayKeyframe>* kfs, int* steps) {
   std::mt19937 rng(seed);
@@ -140,7 +136,8 @@ int ApplyMode(const Mode& mode, const StereoIntrinsics& K,
         continue;
       }
       if (it == p_true.end()) continue;  // no true point: left out in every other mode.
-      const Eigen::Vector2d exact = Project(K, kf.T_w_c_true, it->second);
+      Eigen::Vector2d exact;
+      camera.Project(kf.T_w_c_true.inverse() * it->second, &exact);  // in front (TruePoints).
       const Eigen::Vector2d offset = o.uv - exact;
       if (mode.kind == Mode::kTruth) {
         o.uv = exact;
@@ -178,20 +175,21 @@ int ApplyMode(const Mode& mode, const StereoIntrinsics& K,
 // The window over the keyframes; returns every keyframe's final estimate (in order).
 std::vector<Pose> Replay(const StereoIntrinsics& K, const std::vector<ReplayKeyframe>& kfs) {
   SlidingWindowBa ba(K, SequenceBaOptions());
-  std::vector<Pose> est;
+  const auto pose_of = [&](size_t i) {
+    return *ba.KeyframePose(KeyframeId(static_cast<int64_t>(i)));
+  };
   for (size_t i = 0; i < kfs.size(); ++i) {
     BaKeyframe kf;
     kf.id = KeyframeId(static_cast<int64_t>(i));
     kf.t_ns = static_cast<int64_t>(i);
     kf.observations = kfs[i].observations;
-    kf.T_w_c = i < 2 ? kfs[i].T_w_c_true : est[i - 1] * (est[i - 2].inverse() * est[i - 1]);
+    // The two previous keyframes are still in the window (it holds more than two).
+    kf.T_w_c =
+        i < 2 ? kfs[i].T_w_c_true : pose_of(i - 1) * (pose_of(i - 2).inverse() * pose_of(i - 1));
     ba.AddKeyframe(kf);
     ba.Optimize();
-    est.clear();
-    for (const auto& m : ba.marginalized_keyframes()) est.push_back(m.T_w_c);
-    for (KeyframeId id : ba.WindowKeyframes()) est.push_back(*ba.KeyframePose(id));
   }
-  return est;
+  return testing::AllKeyframePoses(ba);
 }
 
 int Main(int argc, char** argv) {
@@ -228,7 +226,7 @@ int Main(int argc, char** argv) {
   if (kfs.size() < 21) throw Error() << args[0] << ": " << kfs.size() << " keyframes, need 21";
   const std::map<LandmarkId, Eigen::Vector3d> p_true = TruePoints(K, kfs);
   int steps = 0;
-  const int cuts = ApplyMode(*mode, K, p_true, seed, &kfs, &steps);
+  const int cuts = ApplyMode(*mode, cam, p_true, seed, &kfs, &steps);
   const std::vector<Pose> est = Replay(K, kfs);
 
   const size_t tenth = (est.size() - 1) / 10;

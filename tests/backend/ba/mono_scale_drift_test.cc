@@ -31,16 +31,18 @@ double ScaleDrift(const SlidingWindowBa::Options& options, double pixel_noise, u
   o.seed = seed;
   testing::BaScene scene = testing::MakeBaScene(o);
   SlidingWindowBa ba(scene.K, options);
-  std::vector<Pose> est;
+  // The two previous keyframes are still in the window (it holds more than two).
+  const auto pose_of = [&](size_t i) { return *ba.KeyframePose(scene.keyframes[i].id); };
   for (size_t i = 0; i < scene.keyframes.size(); ++i) {
     BaKeyframe kf = scene.keyframes[i];
     for (BaObservation& obs : kf.observations) obs.sigma_px = 1.0;  // Also with exact ones.
     // The gauge pair at the truth; later keyframes from the estimate's constant velocity.
-    kf.T_w_c = i < 2 ? scene.T_w_c_gt[i] : est[i - 1] * (est[i - 2].inverse() * est[i - 1]);
+    kf.T_w_c =
+        i < 2 ? scene.T_w_c_gt[i] : pose_of(i - 1) * (pose_of(i - 2).inverse() * pose_of(i - 1));
     ba.AddKeyframe(kf);
     EXPECT_TRUE(ba.Optimize().usable);
-    est = testing::AllKeyframePoses(ba);
   }
+  const std::vector<Pose> est = testing::AllKeyframePoses(ba);
   const auto scale_of = [&](size_t from, size_t to) {
     double estimated = 0.0, truth = 0.0;
     for (size_t i = from; i < to; ++i) {
