@@ -12,6 +12,7 @@
 
 #include "backend/mono/keyframe_bridge.h"
 #include "core/cv_pose.h"
+#include "core/ransac_order.h"
 
 namespace dala {
 
@@ -229,11 +230,13 @@ std::optional<Pose> SlidingWindowEstimator::PnpPose(const FrameMeasurement& m,
   cv::eigen2cv(rig_.left.K(), K);
   cv::Mat rvec, tvec;
   std::vector<int> inliers;
-  cv::theRNG().state = options_.recovery_seed;
+  // The correspondences in the order that seeds OpenCV's draws (core/ransac_order.h); only the
+  // number of inliers is used below.
+  const std::vector<int> order = RansacOrder(object.size(), options_.ransac_order_seed);
   // Threshold: the chi-square 95 % bound of a 1-pixel observation (2 dof), as the BA's test.
-  const bool found =
-      cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 200,
-                         std::sqrt(kChi2Quantile95Dof2), 0.999, inliers, cv::SOLVEPNP_EPNP);
+  const bool found = cv::solvePnPRansac(
+      Reordered(object, order), Reordered(image, order), K, cv::noArray(), rvec, tvec, false, 200,
+      std::sqrt(kChi2Quantile95Dof2), 0.999, inliers, cv::SOLVEPNP_EPNP);
   if (!found || static_cast<int>(inliers.size()) < min_inliers) {
     VLOG(1) << "frame " << m.frame << ": PnP failed (" << inliers.size() << " inliers of "
             << object.size() << ")";

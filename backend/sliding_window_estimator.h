@@ -181,7 +181,9 @@ struct SlidingWindowEstimatorOptions {
   // one camera only; "always"; "off".
   std::string refine_frames = "mono";
   MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
-  uint64_t recovery_seed = 42;       // Of the mono PnP recovery's RANSAC.
+  // The order of the correspondences handed to OpenCV's RANSAC in the mono PnP recovery, which
+  // is what seeds its draws (core/ransac_order.h): 0 as given.
+  uint64_t ransac_order_seed = 0;
   // One camera: after this many lost frames in a row (PnP recovery failing too: the map is out
   // of view), a new map is initialised and placed where the old one would continue.
   int mono_reinit_after_lost_frames = 10;

@@ -55,6 +55,13 @@ System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), 
   if (options_.estimator == "ba" && !options_.ba.IsValidFor(rig_, &why)) {
     throw Error() << "invalid options: " << why;
   }
+  // One order seed for every OpenCV RANSAC of the run (SystemOptions::ransac_order_seed).
+  const uint64_t order_seed = options_.ransac_order_seed;
+  options_.frontend.tracking_matcher.ransac_order_seed = order_seed;
+  options_.frontend.loop.matcher.ransac_order_seed = order_seed;
+  options_.frontend.motion.ransac_order_seed = order_seed;
+  options_.ba.mono_init.two_view.ransac_order_seed = order_seed;
+  options_.ba.ransac_order_seed = order_seed;
   estimator_ = MakeEstimator(rig_, options_);
   frontend_ = std::make_unique<Frontend>(rig_, options_.frontend);
 }

@@ -67,6 +67,13 @@ void VisitTopLevel(SystemOptions* o, OptionVisitor* v) {
   v->Field("", "use_odometry", &o->use_odometry);
   v->Field("", "odometry_sigma_rot", &o->odometry_sigma_rot);
   v->Field("", "odometry_sigma_trans", &o->odometry_sigma_trans);
+  // Read as an int: a negative one is an error, not a wrapped uint64.
+  int ransac_order_seed = static_cast<int>(o->ransac_order_seed);
+  v->Field("", "ransac_order_seed", &ransac_order_seed);
+  if (ransac_order_seed < 0) {
+    throw Error() << "ransac_order_seed must be >= 0, not " << ransac_order_seed;
+  }
+  o->ransac_order_seed = static_cast<uint64_t>(ransac_order_seed);
   v->BeginExperimental();
   v->Field("", "odometry_sigma_trans_fraction", &o->odometry_sigma_trans_fraction);
   v->EndExperimental();
@@ -105,7 +112,7 @@ void VisitFrontend(FrontendOptions* f, OptionVisitor* v) {
   MotionEstimatorOptions& mo = f->motion;
   v->Field("motion", "ransac_threshold_px", &mo.ransac_threshold_px);
   v->Field("motion", "min_inliers", &mo.min_inliers);
-  // The RANSAC seed, read as an int: a negative one is an error, not a wrapped uint64.
+  // The P3P RANSAC's seed, read as an int: a negative one is an error, not a wrapped uint64.
   int seed = static_cast<int>(mo.seed);
   v->Field("motion", "seed", &seed);
   if (seed < 0) throw Error() << "motion.seed must be >= 0, not " << seed;

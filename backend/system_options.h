@@ -44,6 +44,13 @@ struct SystemOptions {
   double odometry_sigma_rot = 0.002;
   double odometry_sigma_trans = 0.005;
   double odometry_sigma_trans_fraction = 0.02;
+  // The draws of every OpenCV RANSAC of the run (the tracking matcher's fundamental matrix, one
+  // camera's essential matrix, homography, two-view initialisation and PnP recovery): OpenCV seeds
+  // its own generator on every call, so its draws are set by the order of the correspondences
+  // (core/ransac_order.h). 0: as given (OpenCV's own draws); N > 0: shuffled with seed N. System
+  // copies it into those estimators' options. With frontend.motion.seed (the stereo motion's
+  // RANSAC) it is how to check that a result does not depend on the draws.
+  uint64_t ransac_order_seed = 0;
   FrontendOptions frontend;
   SlidingWindowEstimatorOptions ba;
   StereoEkfOptions ekf_stereo;

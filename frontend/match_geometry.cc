@@ -4,6 +4,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
+#include "core/ransac_order.h"
+
 namespace dala {
 
 std::vector<Match> ApplyGeometricCheck(const DetectedImage& a, const DetectedImage& b,
@@ -35,16 +37,18 @@ std::vector<Match> ApplyGeometricCheck(const DetectedImage& a, const DetectedIma
     if (failed != nullptr) *failed = true;
     return out;
   }
+  // The matches in the order that seeds OpenCV's draws (core/ransac_order.h).
+  const std::vector<int> order = RansacOrder(matches.size(), options.ransac_order_seed);
   std::vector<cv::Point2f> pa, pb;
   pa.reserve(matches.size());
   pb.reserve(matches.size());
-  for (const Match& m : matches) {
+  for (const int k : order) {
+    const Match& m = matches[static_cast<size_t>(k)];
     pa.emplace_back(static_cast<float>(a.points[m.i].uv.x()),
                     static_cast<float>(a.points[m.i].uv.y()));
     pb.emplace_back(static_cast<float>(b.points[m.j].uv.x()),
                     static_cast<float>(b.points[m.j].uv.y()));
   }
-  cv::theRNG() = cv::RNG(options.seed);
   std::vector<uchar> mask;
   cv::Mat model;
   if (homography) {
@@ -58,8 +62,10 @@ std::vector<Match> ApplyGeometricCheck(const DetectedImage& a, const DetectedIma
     if (failed != nullptr) *failed = true;
     return out;
   }
+  std::vector<bool> inlier(matches.size(), false);
+  for (size_t k = 0; k < order.size(); ++k) inlier[static_cast<size_t>(order[k])] = mask[k] != 0;
   for (size_t k = 0; k < matches.size(); ++k) {
-    if (mask[k]) out.push_back(matches[k]);
+    if (inlier[k]) out.push_back(matches[k]);
   }
   return out;
 }

@@ -19,7 +19,8 @@
 //    resampled with the group's rotation and scale (so points with a poor own orientation still
 //    match), and the best above propagation_min_zncc is accepted and propagates in turn.
 // 4. Geometric check when the caller knows the model: rectified epipolar (|dv|, disparity
-//    range), fundamental matrix or homography by RANSAC (cv::theRNG() seeded from options.seed).
+//    range), fundamental matrix or homography by OpenCV's RANSAC, whose draws follow the order of
+//    the matches (options.ransac_order_seed; core/ransac_order.h).
 //
 // Usage:
 //   DetectedImage a = DetectHarris(img_a, harris), b = DetectHarris(img_b, harris);
@@ -30,7 +31,7 @@
 //   MatchPrior prior = MatchPrior::RectifiedStereo(/*max_dv=*/2.0, /*min_d=*/0.0, /*max_d=*/150.0);
 //   m = MatchPoints(left, right, MatcherOptions::ForStereo(), &prior);
 //
-// Thread safety: MatchPoints is re-entrant; it seeds the calling thread's cv::theRNG().
+// Thread safety: MatchPoints is re-entrant.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -81,7 +82,9 @@ struct MatcherOptions {
   double ransac_threshold_px = 3.0;  // kFundamental (epipolar distance) / kHomography (reproj.)
   double ransac_confidence = 0.999;
   int ransac_max_iterations = 2000;
-  uint64_t seed = 42;  // Seeds cv::theRNG() before RANSAC.
+  // The order of the matches handed to the kFundamental / kHomography RANSAC, which is what
+  // seeds OpenCV's draws (core/ransac_order.h): 0 as matched, N > 0 shuffled with seed N.
+  uint64_t ransac_order_seed = 0;
 
   bool IsValid(std::string* why) const;
 

@@ -2,15 +2,15 @@
 
 #include <glog/logging.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <random>
-
-#include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <random>
 
 #include "core/cv_pose.h"
+#include "core/ransac_order.h"
 
 namespace dala {
 namespace {
@@ -214,15 +214,15 @@ std::optional<MotionResult> MotionEstimator::EstimateEssential(
   CHECK_EQ(uv_prev.size(), uv_cur.size()) << "EstimateEssential needs paired points";
   const int n = static_cast<int>(uv_prev.size());
   if (n < std::max(8, options_.min_inliers)) return std::nullopt;
+  // The correspondences in the order that seeds OpenCV's draws (core/ransac_order.h).
+  const std::vector<int> order = RansacOrder(uv_prev.size(), options_.ransac_order_seed);
   std::vector<cv::Point2d> a, b;
-  for (int i = 0; i < n; ++i) {
+  for (const int i : order) {
     a.emplace_back(uv_prev[i].x(), uv_prev[i].y());
     b.emplace_back(uv_cur[i].x(), uv_cur[i].y());
   }
   const cv::Mat K = (cv::Mat_<double>(3, 3) << rig_.left.fx, 0, rig_.left.cx, 0, rig_.left.fy,
                      rig_.left.cy, 0, 0, 1);
-  // OpenCV's RANSAC draws from its own generator; seed it so runs repeat.
-  cv::theRNG().state = options_.seed;
   cv::Mat mask;
   const cv::Mat E = cv::findEssentialMat(a, b, K, cv::RANSAC, options_.ransac_confidence,
                                          options_.ransac_threshold_px, mask);
@@ -243,7 +243,7 @@ std::optional<MotionResult> MotionEstimator::EstimateEssential(
   result.estimate.correspondences = n;
   result.estimate.scale_known = false;
   result.inlier.resize(n);
-  for (int i = 0; i < n; ++i) result.inlier[i] = mask.at<uchar>(i) != 0;
+  for (int k = 0; k < n; ++k) result.inlier[order[k]] = mask.at<uchar>(k) != 0;
   return result;
 }
 
@@ -252,12 +252,12 @@ std::optional<MotionResult> MotionEstimator::EstimateRotation(
   CHECK_EQ(uv_prev.size(), uv_cur.size()) << "EstimateRotation needs paired points";
   const int n = static_cast<int>(uv_prev.size());
   if (n < std::max(4, options_.min_inliers)) return std::nullopt;
+  const std::vector<int> order = RansacOrder(uv_prev.size(), options_.ransac_order_seed);
   std::vector<cv::Point2d> a, b;
-  for (int i = 0; i < n; ++i) {
+  for (const int i : order) {
     a.emplace_back(uv_prev[i].x(), uv_prev[i].y());
     b.emplace_back(uv_cur[i].x(), uv_cur[i].y());
   }
-  cv::theRNG().state = options_.seed;
   cv::Mat mask;
   const cv::Mat H_cv = cv::findHomography(a, b, cv::RANSAC, options_.ransac_threshold_px, mask,
                                           options_.ransac_max_iterations,
@@ -279,7 +279,7 @@ std::optional<MotionResult> MotionEstimator::EstimateRotation(
   result.estimate.correspondences = n;
   result.estimate.scale_known = false;
   result.inlier.resize(n);
-  for (int i = 0; i < n; ++i) result.inlier[i] = mask.at<uchar>(i) != 0;
+  for (int k = 0; k < n; ++k) result.inlier[order[k]] = mask.at<uchar>(k) != 0;
   return result;
 }
 

@@ -40,8 +40,12 @@ struct MotionEstimatorOptions {
   double ransac_confidence = 0.999;
   // ...or after this many samples.
   int ransac_max_iterations = 300;
-  // Seed of the RANSAC sampler: the same input and seed give the same estimate.
+  // Seed of the P3P RANSAC's sampler (std::mt19937_64): the same input and seed give the same
+  // estimate.
   uint64_t seed = 42;
+  // One camera: the order of the correspondences handed to OpenCV's essential-matrix and
+  // homography RANSAC, which is what seeds their draws (core/ransac_order.h): 0 as given.
+  uint64_t ransac_order_seed = 0;
   // Gauss-Newton iterations of the refinement (each with an inlier re-selection).
   int refine_iterations = 10;
   // Chi-square gate on r^T W r for inliers after refinement (3 dof: 95 % = 7.815).
@@ -84,8 +88,9 @@ class MotionEstimator {
 
   // Monocular, when the essential matrix is degenerate (a camera turning on the spot, or not
   // moving): the homography of a pure rotation, x_cur ~ K R_cur_prev K^-1 x_prev (OpenCV RANSAC,
-  // seeded), R_cur_prev = the rotation nearest to K^-1 H K (SVD, scaled to det 1). The motion
-  // has that rotation and no translation (scale_known = false). nullopt with too few inliers.
+  // its draws set by ransac_order_seed), R_cur_prev = the rotation nearest to K^-1 H K (SVD, scaled
+  // to det 1). The motion has that rotation and no translation (scale_known = false). nullopt with
+  // too few inliers.
   std::optional<MotionResult> EstimateRotation(const std::vector<Eigen::Vector2d>& uv_prev,
                                                const std::vector<Eigen::Vector2d>& uv_cur) const;
 

@@ -2,12 +2,14 @@
 
 #include <glog/logging.h>
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
-#include <Eigen/SVD>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <sstream>
+
+#include "core/ransac_order.h"
 
 namespace dala {
 namespace {
@@ -165,10 +167,14 @@ Reconstruction Reconstruct(const PinholeCamera& camera, const Eigen::Matrix3d& R
   return rec;
 }
 
-std::vector<bool> MaskToVector(const cv::Mat& mask, size_t n) {
-  std::vector<bool> v(n, false);
+// A RANSAC mask over the reordered correspondences (k-th = order[k]-th) as flags in their own
+// order.
+std::vector<bool> MaskToVector(const cv::Mat& mask, const std::vector<int>& order) {
+  std::vector<bool> v(order.size(), false);
   if (mask.empty()) return v;
-  for (size_t i = 0; i < n; ++i) v[i] = mask.at<uchar>(static_cast<int>(i)) != 0;
+  for (size_t k = 0; k < order.size(); ++k) {
+    v[static_cast<size_t>(order[k])] = mask.at<uchar>(static_cast<int>(k)) != 0;
+  }
   return v;
 }
 
@@ -222,8 +228,10 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
                            options.min_points);
     return result;
   }
+  // The correspondences in the order that seeds OpenCV's draws (core/ransac_order.h).
+  const std::vector<int> order = RansacOrder(n, options.ransac_order_seed);
   std::vector<cv::Point2d> a, b;
-  for (size_t i = 0; i < n; ++i) {
+  for (const int i : order) {
     a.emplace_back(uv_ref[i].x(), uv_ref[i].y());
     b.emplace_back(uv_cur[i].x(), uv_cur[i].y());
   }
@@ -232,14 +240,12 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   // RANSAC thresholds: the 95 % bounds of one inlier's error (1 dof epipolar, 2 dof transfer).
   const double th_e = options.sigma_px * std::sqrt(kChi2Dof1);
   const double th_h = options.sigma_px * std::sqrt(kChi2Dof2);
-  cv::theRNG().state = options.seed;
   cv::Mat mask_e, mask_h;
   const int e_method = options.essential_sampler == TwoViewOptions::EssentialSampler::kMagsac
                            ? cv::USAC_MAGSAC
                            : cv::RANSAC;
   const cv::Mat E_cv = cv::findEssentialMat(a, b, K_cv, e_method, options.ransac_confidence, th_e,
                                             options.ransac_max_iterations, mask_e);
-  cv::theRNG().state = options.seed;
   const cv::Mat H_cv = cv::findHomography(a, b, cv::RANSAC, th_h, mask_h,
                                           options.ransac_max_iterations,
                                           options.ransac_confidence);
@@ -265,7 +271,7 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   const bool use_h = !have_e || (have_h && result.homography_score_ratio > options.homography_ratio);
 
   // The chosen model's RANSAC inliers: what is triangulated and what the parallax tests see.
-  const std::vector<bool> inlier = MaskToVector(use_h ? mask_h : mask_e, n);
+  const std::vector<bool> inlier = MaskToVector(use_h ? mask_h : mask_e, order);
   result.num_inliers = static_cast<int>(std::count(inlier.begin(), inlier.end(), true));
   Reconstruction best;
   if (use_h) {

@@ -64,7 +64,9 @@ struct TwoViewOptions {
   EssentialSampler essential_sampler = EssentialSampler::kRansac;
   double ransac_confidence = 0.999;
   int ransac_max_iterations = 1000;
-  uint64_t seed = 42;
+  // The order of the correspondences handed to OpenCV's RANSAC (E and H), which is what seeds
+  // its draws (core/ransac_order.h): 0 as given.
+  uint64_t ransac_order_seed = 0;
   double homography_ratio = 0.45;  // R_H above this selects the homography.
   double ambiguity_ratio = 0.75;   // Homography: second best / best good points above => refused.
   int min_points = 50;             // Good triangulated points.

@@ -138,5 +138,49 @@ TEST(MotionEstimator, EssentialGivesDirectionOfTranslation) {
   EXPECT_LT(LogSO3(truth.linear().transpose() * result->estimate.T_prev_cur.linear()).norm(), 1e-2);  // E is not refined.
 }
 
+// One camera: the essential matrix and the rotation homography run OpenCV's RANSAC on the
+// correspondences in the order of options.ransac_order_seed; their inlier flags come back in the
+// caller's order for every seed.
+TEST(MotionEstimator, OneCameraInliersAreInTheCallersOrderForEveryOrderSeed) {
+  std::mt19937 rng(9);
+  const StereoRig rig = TestRig();
+  const auto matches = MakeCorrespondences(rig, TestMotion(), 200, 0.3, 0.0, &rng);
+  std::vector<Eigen::Vector2d> uv_prev, uv_cur, uv_rotated;
+  const Pose rotation =
+      MakePose(ExpSO3(Eigen::Vector3d(0.01, 0.04, -0.02)), Eigen::Vector3d::Zero());
+  for (const auto& m : matches) {
+    Eigen::Vector2d uv, uv_r;
+    ASSERT_TRUE(rig.left.Project(m.p_prev, &uv));
+    ASSERT_TRUE(rig.left.Project(rotation.inverse() * m.p_prev, &uv_r));
+    uv_prev.push_back(uv);
+    uv_cur.push_back(m.uv_cur);
+    uv_rotated.push_back(uv_r);
+  }
+  for (size_t i = 0; i < uv_cur.size(); i += 4) {  // Every fourth correspondence is wrong.
+    uv_cur[i] += Eigen::Vector2d(35, -20);
+    uv_rotated[i] += Eigen::Vector2d(35, -20);
+  }
+  for (const uint64_t order_seed : {0u, 1u, 5u}) {
+    SCOPED_TRACE(order_seed);
+    MotionEstimatorOptions options;
+    options.ransac_order_seed = order_seed;
+    MotionEstimator estimator(rig, options);
+    for (const auto* cur : {&uv_cur, &uv_rotated}) {
+      const auto result = cur == &uv_cur ? estimator.EstimateEssential(uv_prev, *cur)
+                                         : estimator.EstimateRotation(uv_prev, *cur);
+      ASSERT_TRUE(result.has_value());
+      ASSERT_EQ(result->inlier.size(), uv_prev.size());
+      int wrong_kept = 0, right_kept = 0;
+      for (size_t i = 0; i < uv_prev.size(); ++i) {
+        (i % 4 == 0 ? wrong_kept : right_kept) += result->inlier[i];
+      }
+      // A wrong correspondence moved along its epipolar line can pass; flags in another order
+      // would keep about as many of the 50 wrong ones as of the 150 right ones.
+      EXPECT_LE(wrong_kept, 5);
+      EXPECT_GT(right_kept, 110);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace dala
