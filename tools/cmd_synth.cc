@@ -30,6 +30,9 @@ DEFINE_double(exposure, 0.5, "exposure time as a fraction of the frame interval 
 DEFINE_double(brightness, 0.0,
               "amplitude of the global brightness change (image gain 1 +- this, slow sine)");
 DEFINE_double(baseline, 0.4, "stereo baseline (m)");
+DEFINE_double(texel_density, 1.0,
+              "texels per metre on every surface, times this (1: walls 60/m; 4: detail down to "
+              "a pixel at 3 m with fx 707, the texture repeating every 4.3 m)");
 DEFINE_double(right_cx_error_px, 0.0,
               "render the right image with its principal point this many pixels off calib.txt's "
               "(every disparity that much too small, as a real rig's rectification error leaves "
@@ -85,6 +88,7 @@ int RunSynth(const std::vector<std::string>& args) {
   if (FLAGS_fps < 0) throw Error() << "--fps " << FLAGS_fps << " must be > 0 (0: 10 Hz)";
   if (FLAGS_fps > 0) options.fps = FLAGS_fps;
   options.baseline = FLAGS_baseline;
+  options.texel_density_scale = FLAGS_texel_density;
   options.right_cx_error_px = FLAGS_right_cx_error_px;
   if (!FLAGS_distortion.empty() && !FLAGS_fisheye.empty()) {
     throw Error() << "--distortion and --fisheye are two lenses: give one";
@@ -119,13 +123,16 @@ std::string Usage() {
   std::ostringstream os;
   os << "dala synth --out DIR [--preset NAME] [--frames N] [--seed S] [--mono] [--points] "
         "[--odometry] [--width W --height H] [--noise SIGMA] [--blur] [--brightness A] [--fps HZ]\n"
-        "           [--distortion radtan|K1,K2,P1,P2[,K3] | --fisheye equidistant|K1,K2,K3,K4] ...\n\n"
+        "           [--texel_density K]\n"
+        "           [--distortion radtan|K1,K2,P1,P2[,K3] | --fisheye equidistant|K1,K2,K3,K4] "
+        "...\n\n"
         "Renders a synthetic sequence of a procedural textured world with exact ground truth\n"
         "into a KITTI-like folder: image_0/ (left), image_1/ (right), calib.txt, times.txt,\n"
         "poses.txt (T_w_c0), synth.yaml, optional points.ply and odometry.txt, and calibration/\n"
         "with the cameras in each calibration format `dala run --calibration` reads (OpenCV,\n"
         "Kalibr, ROS camera_info, dala's own). With --distortion or --fisheye the images are\n"
-        "rendered through that lens; `dala run` then undistorts them with calibration/kalibr.yaml.\n"
+        "rendered through that lens; `dala run` then undistorts them with "
+        "calibration/kalibr.yaml.\n"
         "World frame: x east, y north, z up. See docs/synthetic.md.\n\npresets:\n";
   for (const auto& p : sim::Presets()) {
     os << "  " << p.name << std::string(p.name.size() < 12 ? 12 - p.name.size() : 1, ' ')

@@ -134,6 +134,7 @@ void WriteMarker(const std::string& path, const SyntheticSequence& seq) {
   fs << "blur_samples" << o.blur_samples;
   fs << "exposure_fraction" << o.exposure_fraction;
   fs << "brightness_change" << o.brightness_change;
+  fs << "texel_density_scale" << o.texel_density_scale;
   fs << "world_frame"
      << "x east, y north, z up; camera x right, y down, z forward";
   const std::string text = fs.releaseAndGetString();

@@ -64,6 +64,8 @@ bool SimOptions::IsValid(std::string* why) const {
     os << "lens coefficients need a lens (radtan or fisheye)";
   } else if (texture_size < 64 || texture_size > 4096 || (texture_size & (texture_size - 1))) {
     os << "texture_size must be a power of two in 64..4096, got " << texture_size;
+  } else if (!(texel_density_scale > 0.0 && texel_density_scale <= 16.0)) {
+    os << "texel_density_scale must be in (0, 16], got " << texel_density_scale;
   } else {
     return true;
   }
@@ -100,7 +102,8 @@ SyntheticSequence::SyntheticSequence(const SimOptions& options) : options_(optio
   camera_.cy = options_.cy_or_centre();
   canvas_ = camera_;
   BuildLens();
-  world_ = BuildWorld(options_.preset, options_.seed, options_.texture_size);
+  world_ = BuildWorld(options_.preset, options_.seed, options_.texture_size,
+                      options_.texel_density_scale);
   for (int i = 0; i < frames_; ++i) ground_truth_.Add(t_ns(i), T_w_c0(i));
 }
 

@@ -83,6 +83,12 @@ struct SimOptions {
   std::vector<double> lens_coefficients;
   // Side of the procedural textures (power of two); smaller builds faster, looks coarser.
   int texture_size = 1024;
+  // Texels per metre on every surface, times this (1: walls 60, ground 80, terrain 12). A
+  // surface nearer than f / (60 texels/m) (12 m at f = 707 px) shows each texel over more than
+  // a pixel, interpolated bilinearly: smooth where a real wall has finer detail, and Harris
+  // corners on it move as the camera approaches (docs/monocular.md, "Scale drift"). 4 keeps a
+  // texel under a pixel down to 3 m at f = 707; the texture then repeats every 4.3 m of wall.
+  double texel_density_scale = 1.0;
 
   bool IsValid(std::string* why) const;
   // Effective principal point.

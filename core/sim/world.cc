@@ -362,8 +362,9 @@ void AddTextures(Scene* scene, uint64_t seed, TextureStyle style, int side) {
   }
 }
 
-void BuildCity(Scene* scene, uint64_t seed, bool weak, double scale = 1.0) {
-  SceneBuilder builder(scene, 60.0, weak);
+void BuildCity(Scene* scene, uint64_t seed, bool weak, double texel_density_scale,
+               double scale = 1.0) {
+  SceneBuilder builder(scene, 60.0 * texel_density_scale, weak);
   if (weak) {
     // Overcast: a sky close to the walls' brightness, flat light.
     scene->sky_horizon = 160.f;
@@ -375,13 +376,13 @@ void BuildCity(Scene* scene, uint64_t seed, bool weak, double scale = 1.0) {
   LineStreet(rng, builder, loop, loop, 0.0);
   AddSkyline(rng, builder, Eigen::Vector2d::Zero(), 95 * scale, 140 * scale, 36);
   // The ground is seen close up: a finer texture than the walls.
-  SceneBuilder(scene, 80.0, weak).AddGround(-160, 160, -150, 150, 10.0, [&](int ix, int iy) {
-    return SimRng(MixSeed(seed, 2 + ix * 1000 + iy));
-  });
+  SceneBuilder(scene, 80.0 * texel_density_scale, weak)
+      .AddGround(-160, 160, -150, 150, 10.0,
+                 [&](int ix, int iy) { return SimRng(MixSeed(seed, 2 + ix * 1000 + iy)); });
 }
 
-void BuildCorridor(Scene* scene, uint64_t seed) {
-  SceneBuilder builder(scene, 60.0);
+void BuildCorridor(Scene* scene, uint64_t seed, double texel_density_scale) {
+  SceneBuilder builder(scene, 60.0 * texel_density_scale);
   // The street the path weaves along (the path itself, sampled; period 50 m).
   const CorridorPath path(1.0);
   std::vector<Eigen::Vector2d> street;
@@ -397,7 +398,7 @@ void BuildCorridor(Scene* scene, uint64_t seed) {
       {-30, 40, 10, 0}, {40, 85, 11, 0}, {85, 140, 12, 0}, {40, 85, 11, 100}, {185, 260, 14, 0}};
   for (const Segment& seg : segments) {
     Scene part;
-    SceneBuilder part_builder(&part, 60.0);
+    SceneBuilder part_builder(&part, 60.0 * texel_density_scale);
     SimRng rng(MixSeed(seed, seg.stream));
     std::vector<Eigen::Vector2d> sub;
     for (const Eigen::Vector2d& q : street) {
@@ -411,9 +412,10 @@ void BuildCorridor(Scene* scene, uint64_t seed) {
                             rng.Uniform(8, 14), rng.Uniform(14, 30));
       }
     }
-    SceneBuilder(&part, 80.0).AddGround(seg.x0, seg.x1, -60, 60, 5.0, [&](int ix, int iy) {
-      return SimRng(MixSeed(seed, seg.stream * 100000 + ix * 1000 + iy));
-    });
+    SceneBuilder(&part, 80.0 * texel_density_scale)
+        .AddGround(seg.x0, seg.x1, -60, 60, 5.0, [&](int ix, int iy) {
+          return SimRng(MixSeed(seed, seg.stream * 100000 + ix * 1000 + iy));
+        });
     const Eigen::Vector3d shift(seg.shift, 0, 0);
     for (Surface s : part.surfaces) {
       s.o_w += shift;
@@ -423,14 +425,14 @@ void BuildCorridor(Scene* scene, uint64_t seed) {
   }
 }
 
-void BuildTerrain(Scene* scene, uint64_t seed) {
-  SceneBuilder builder(scene, 12.0);
+void BuildTerrain(Scene* scene, uint64_t seed, double texel_density_scale) {
+  SceneBuilder builder(scene, 12.0 * texel_density_scale);
   SimRng rng(MixSeed(seed, 20));
   builder.AddTerrain(rng, -360, 360, -300, 300, 8.0, 64.0);
   // A few buildings on the terrain.
   for (int i = 0; i < 40; ++i) {
     const Eigen::Vector2d c(rng.Uniform(-200, 200), rng.Uniform(-120, 120));
-    SceneBuilder(scene, 25.0)
+    SceneBuilder(scene, 25.0 * texel_density_scale)
         .AddBox(rng, c, TerrainHeight(c.x(), c.y()) - 3.0, rng.Uniform(0, M_PI), rng.Uniform(8, 20),
                 rng.Uniform(8, 16), rng.Uniform(6, 18));
   }
@@ -469,13 +471,14 @@ const PresetInfo* FindPreset(const std::string& name) {
   return nullptr;
 }
 
-World BuildWorld(const std::string& preset, uint64_t seed, int texture_size) {
+World BuildWorld(const std::string& preset, uint64_t seed, int texture_size,
+                 double texel_density_scale) {
   const PresetInfo* info = FindPreset(preset);
   CHECK(info != nullptr) << "unknown synthetic preset '" << preset << "'";
   World world;
   TextureStyle style = TextureStyle::kRich;
   if (preset == "rover_loop" || preset == "rotation" || preset == "low_texture") {
-    BuildCity(&world.scene, seed, preset == "low_texture");
+    BuildCity(&world.scene, seed, preset == "low_texture", texel_density_scale);
     if (preset == "rotation") {
       world.path = std::make_unique<RotationPath>(info->duration_s);
     } else {
@@ -483,16 +486,16 @@ World BuildWorld(const std::string& preset, uint64_t seed, int texture_size) {
     }
     if (preset == "low_texture") style = TextureStyle::kWeak;
   } else if (preset == "fast") {
-    BuildCity(&world.scene, seed, false);
+    BuildCity(&world.scene, seed, false, texel_density_scale);
     world.path = std::make_unique<LoopPath>(info->duration_s, true);
   } else if (preset == "small_loop") {
-    BuildCity(&world.scene, seed, false, kSmallLoopScale);
+    BuildCity(&world.scene, seed, false, texel_density_scale, kSmallLoopScale);
     world.path = std::make_unique<LoopPath>(info->duration_s, false, kSmallLoopScale);
   } else if (preset == "flight") {
-    BuildTerrain(&world.scene, seed);
+    BuildTerrain(&world.scene, seed, texel_density_scale);
     world.path = std::make_unique<FlightPath>(info->duration_s);
   } else if (preset == "false_loop") {
-    BuildCorridor(&world.scene, seed);
+    BuildCorridor(&world.scene, seed, texel_density_scale);
     world.path = std::make_unique<CorridorPath>(2.0);
   }
   AddTextures(&world.scene, seed, style, texture_size);

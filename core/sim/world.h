@@ -39,8 +39,11 @@ struct World {
 };
 
 // Builds a preset's world; everything (geometry, textures, placement) follows from `seed`.
-// CHECK-fails on an unknown name (validate with FindPreset first).
-World BuildWorld(const std::string& preset, uint64_t seed, int texture_size = 1024);
+// texel_density_scale multiplies the texels per metre of every surface
+// (SyntheticSequenceOptions::texel_density_scale). CHECK-fails on an unknown name (validate with
+// FindPreset first).
+World BuildWorld(const std::string& preset, uint64_t seed, int texture_size = 1024,
+                 double texel_density_scale = 1.0);
 
 }  // namespace dala::sim
 

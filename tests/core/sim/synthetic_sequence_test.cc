@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/sim/world.h"
 #include "tests/test_util.h"
 
 namespace dala::sim {
@@ -91,6 +92,11 @@ TEST(SyntheticSequenceTest, InvalidOptionsAreRejected) {
   o = SimOptions();
   o.texture_size = 300;
   EXPECT_FALSE(o.IsValid(&why));
+  for (const double scale : {0.0, -1.0, 17.0}) {
+    o = SimOptions();
+    o.texel_density_scale = scale;
+    EXPECT_FALSE(o.IsValid(&why)) << scale;
+  }
   o = SimOptions();
   o.noise_sigma = -1;
   EXPECT_FALSE(o.IsValid(&why));
@@ -299,6 +305,24 @@ TEST(SyntheticSequenceTest, MotionBlurAndBrightnessChangeTheImages) {
     lo = std::min(lo, m), hi = std::max(hi, m);
   }
   EXPECT_GT(hi - lo, 20.0);
+}
+
+// More texels per metre: every surface's texel axes grow by the scale; the geometry, the
+// textures and their placement do not change.
+TEST(SyntheticSequenceTest, TexelDensityScaleMultipliesEverySurfacesTexelsPerMetre) {
+  for (const std::string preset : {"rover_loop", "flight", "false_loop"}) {
+    SCOPED_TRACE(preset);
+    const World coarse = BuildWorld(preset, 3, 64);
+    const World fine = BuildWorld(preset, 3, 64, 2.5);
+    ASSERT_EQ(coarse.scene.surfaces.size(), fine.scene.surfaces.size());
+    for (size_t i = 0; i < coarse.scene.surfaces.size(); ++i) {
+      const Surface& c = coarse.scene.surfaces[i];
+      const Surface& f = fine.scene.surfaces[i];
+      ASSERT_TRUE(c.o_w == f.o_w && c.a_w == f.a_w && c.b_w == f.b_w && c.texture == f.texture);
+      ASSERT_NEAR(f.uv_a.norm(), 2.5 * c.uv_a.norm(), 1e-9 * f.uv_a.norm());
+      ASSERT_NEAR(f.uv_b.norm(), 2.5 * c.uv_b.norm(), 1e-9 * f.uv_b.norm());
+    }
+  }
 }
 
 TEST(NoisyOdometryTest, ZeroNoiseIsGroundTruthAndNoiseDriftsDeterministically) {
