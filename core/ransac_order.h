@@ -9,8 +9,8 @@
 // samples, whatever cv::theRNG() holds. Their draws are changed by the order alone, so a seed for
 // them is a permutation: RansacOrder(n, seed) is the identity for seed 0 (the correspondences as
 // given: OpenCV's own draws) and std::shuffle with std::mt19937_64(seed) otherwise. The same n and
-// seed give the same order on every platform (std::shuffle's algorithm is fixed by libstdc++, the
-// generator by the standard).
+// seed give the same order with the same standard library (the generator's sequence is fixed by
+// the standard, std::shuffle's use of it by the library).
 //
 // Usage, for correspondences a[i] <-> b[i]:
 //   const std::vector<int> order = RansacOrder(a.size(), seed);
