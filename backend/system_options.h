@@ -48,7 +48,7 @@ struct SystemOptions {
   // camera's essential matrix, homography, two-view initialisation and PnP recovery): OpenCV seeds
   // its own generator on every call, so its draws are set by the order of the correspondences
   // (core/ransac_order.h). 0: as given (OpenCV's own draws); N > 0: shuffled with seed N. System
-  // copies it into those estimators' options. With frontend.motion.seed (the stereo motion's
+  // copies it into those estimators' options. With motion.seed (the stereo motion's P3P
   // RANSAC) it is how to check that a result does not depend on the draws.
   uint64_t ransac_order_seed = 0;
   FrontendOptions frontend;

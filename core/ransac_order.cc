@@ -16,4 +16,13 @@ std::vector<int> RansacOrder(size_t n, uint64_t seed) {
   return order;
 }
 
+std::vector<bool> MaskInGivenOrder(const cv::Mat& mask, const std::vector<int>& order) {
+  std::vector<bool> flags(order.size(), false);
+  if (mask.empty()) return flags;
+  for (size_t k = 0; k < order.size(); ++k) {
+    flags[static_cast<size_t>(order[k])] = mask.at<uchar>(static_cast<int>(k)) != 0;
+  }
+  return flags;
+}
+
 }  // namespace dala

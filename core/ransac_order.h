@@ -15,15 +15,21 @@
 // Usage, for correspondences a[i] <-> b[i]:
 //   const std::vector<int> order = RansacOrder(a.size(), seed);
 //   cv::findHomography(Reordered(a, order), Reordered(b, order), cv::RANSAC, th, mask);
-//   inlier[order[k]] = mask[k] != 0;   // mask is in the reordered sequence.
+//   std::vector<bool> inlier = MaskInGivenOrder(mask, order);  // mask is in the reordered one.
 
 #include <cstddef>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <vector>
 
 namespace dala {
 
 std::vector<int> RansacOrder(size_t n, uint64_t seed);
+
+// A RANSAC inlier mask over the reordered correspondences (its k-th entry is correspondence
+// order[k]) as flags in the correspondences' own order; all false when the mask is empty (no
+// model). mask: CV_8U with order.size() entries, as OpenCV's estimators write it.
+std::vector<bool> MaskInGivenOrder(const cv::Mat& mask, const std::vector<int>& order);
 
 // out[k] = v[order[k]].
 template <typename T>

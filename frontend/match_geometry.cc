@@ -49,7 +49,7 @@ std::vector<Match> ApplyGeometricCheck(const DetectedImage& a, const DetectedIma
     pb.emplace_back(static_cast<float>(b.points[m.j].uv.x()),
                     static_cast<float>(b.points[m.j].uv.y()));
   }
-  std::vector<uchar> mask;
+  cv::Mat mask;
   cv::Mat model;
   if (homography) {
     model = cv::findHomography(pa, pb, cv::RANSAC, options.ransac_threshold_px, mask,
@@ -58,12 +58,11 @@ std::vector<Match> ApplyGeometricCheck(const DetectedImage& a, const DetectedIma
     model = cv::findFundamentalMat(pa, pb, cv::FM_RANSAC, options.ransac_threshold_px,
                                    options.ransac_confidence, options.ransac_max_iterations, mask);
   }
-  if (model.empty() || mask.size() != matches.size()) {
+  if (model.empty() || mask.total() != matches.size()) {
     if (failed != nullptr) *failed = true;
     return out;
   }
-  std::vector<bool> inlier(matches.size(), false);
-  for (size_t k = 0; k < order.size(); ++k) inlier[static_cast<size_t>(order[k])] = mask[k] != 0;
+  const std::vector<bool> inlier = MaskInGivenOrder(mask, order);
   for (size_t k = 0; k < matches.size(); ++k) {
     if (inlier[k]) out.push_back(matches[k]);
   }

@@ -242,8 +242,7 @@ std::optional<MotionResult> MotionEstimator::EstimateEssential(
   result.estimate.inliers = good;
   result.estimate.correspondences = n;
   result.estimate.scale_known = false;
-  result.inlier.resize(n);
-  for (int k = 0; k < n; ++k) result.inlier[order[k]] = mask.at<uchar>(k) != 0;
+  result.inlier = MaskInGivenOrder(mask, order);
   return result;
 }
 
@@ -278,8 +277,7 @@ std::optional<MotionResult> MotionEstimator::EstimateRotation(
   result.estimate.inliers = inliers;
   result.estimate.correspondences = n;
   result.estimate.scale_known = false;
-  result.inlier.resize(n);
-  for (int k = 0; k < n; ++k) result.inlier[order[k]] = mask.at<uchar>(k) != 0;
+  result.inlier = MaskInGivenOrder(mask, order);
   return result;
 }
 

@@ -167,17 +167,6 @@ Reconstruction Reconstruct(const PinholeCamera& camera, const Eigen::Matrix3d& R
   return rec;
 }
 
-// A RANSAC mask over the reordered correspondences (k-th = order[k]-th) as flags in their own
-// order.
-std::vector<bool> MaskToVector(const cv::Mat& mask, const std::vector<int>& order) {
-  std::vector<bool> v(order.size(), false);
-  if (mask.empty()) return v;
-  for (size_t k = 0; k < order.size(); ++k) {
-    v[static_cast<size_t>(order[k])] = mask.at<uchar>(static_cast<int>(k)) != 0;
-  }
-  return v;
-}
-
 }  // namespace
 
 bool TwoViewOptions::IsValid(std::string* why) const {
@@ -271,7 +260,7 @@ TwoViewResult InitializeTwoView(const PinholeCamera& camera,
   const bool use_h = !have_e || (have_h && result.homography_score_ratio > options.homography_ratio);
 
   // The chosen model's RANSAC inliers: what is triangulated and what the parallax tests see.
-  const std::vector<bool> inlier = MaskToVector(use_h ? mask_h : mask_e, order);
+  const std::vector<bool> inlier = MaskInGivenOrder(use_h ? mask_h : mask_e, order);
   result.num_inliers = static_cast<int>(std::count(inlier.begin(), inlier.end(), true));
   Reconstruction best;
   if (use_h) {

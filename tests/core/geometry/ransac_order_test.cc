@@ -33,6 +33,10 @@ TEST(RansacOrder, OtherSeedsShuffleRepeatably) {
   const std::vector<char> letters = {'a', 'b', 'c', 'd'};
   const std::vector<int> order = {2, 0, 3, 1};
   EXPECT_EQ(Reordered(letters, order), (std::vector<char>{'c', 'a', 'd', 'b'}));
+  // A mask over the reordered letters (c and d kept) back in the letters' order.
+  const cv::Mat mask = (cv::Mat_<uchar>(4, 1) << 1, 0, 1, 0);
+  EXPECT_EQ(MaskInGivenOrder(mask, order), (std::vector<bool>{false, false, true, true}));
+  EXPECT_EQ(MaskInGivenOrder(cv::Mat(), order), std::vector<bool>(4, false));
 }
 
 // Point pairs of a homography, two thirds of them moved at random: with a few RANSAC iterations
