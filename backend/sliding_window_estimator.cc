@@ -46,6 +46,7 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (max_new_landmarks_per_keyframe < 10)
     return fail("ba.max_new_landmarks_per_keyframe must be >= 10");
   if (grid_cols < 1 || grid_rows < 1) return fail("ba.grid_cols and ba.grid_rows must be >= 1");
+  if (!(observation_sigma_px > 0)) return fail("ba.sigma_px must be > 0");
   if (mono_reinit_after_lost_frames < 1)
     return fail("ba.mono_reinit_after_lost_frames must be >= 1");
   if (refine_frames != "mono" && refine_frames != "always" && refine_frames != "off") {
@@ -87,15 +88,16 @@ StereoIntrinsics IntrinsicsOf(const StereoRig& rig, double disparity_offset_px =
 // See the class comment, "Frames between keyframes": ~20 KB each (a frame's observations).
 constexpr size_t kMaxWaitingFrames = 200;
 
-BaObservation ToBa(const FeatureObservation& o) {
+}  // namespace
+
+BaObservation SlidingWindowEstimator::ToBa(const FeatureObservation& o) const {
   BaObservation b;
   b.landmark = o.landmark;
   b.uv = o.uv;
   b.u_right = o.u_right;
-  b.sigma_px = o.sigma_px;
+  b.sigma_px = options_.observation_sigma_px;
   return b;
 }
-}  // namespace
 
 SlidingWindowEstimator::SlidingWindowEstimator(const StereoRig& rig,
                                                const SlidingWindowEstimatorOptions& options)

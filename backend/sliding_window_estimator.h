@@ -180,6 +180,14 @@ struct SlidingWindowEstimatorOptions {
   // left the window (see the class comment, "Frames between keyframes"). "mono" (default): with
   // one camera only; "always"; "off".
   std::string refine_frames = "mono";
+  // The pixel sigma of every image observation the window uses (its solves, the pose-only
+  // tracking, the chi-square outlier tests, the PnP recovery's refinement, the global BA): the
+  // Huber loss bends at ba.loss_scale sigma and the test rejects a residual beyond
+  // sqrt(chi2_95(dof)) sigma. The frontend's stereo.sigma_px (1 px) is the EKFs' measurement
+  // noise and the stereo triangulation's covariance. Smaller values (0.35-0.5) improve KITTI's
+  // images but lose one camera's tracking under fast forward motion (docs/results.md,
+  // "ba.sigma_px"), so the default stays at 1.
+  double observation_sigma_px = 1.0;
   MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
   // The order of the correspondences handed to OpenCV's RANSAC in the mono PnP recovery, which
   // is what seeds its draws (core/ransac_order.h): 0 as given.
@@ -286,6 +294,8 @@ class SlidingWindowEstimator : public Estimator {
   Pose KeyframePoseNow(KeyframeId id) const;
   std::vector<BaObservation> SelectKeyframeObservations(const FrameMeasurement& m,
                                                         const Pose& T_w_c);
+  // A frontend observation as the window uses it, at options_.observation_sigma_px.
+  BaObservation ToBa(const FeatureObservation& o) const;
   std::vector<BaObservation> WindowObservations(const FrameMeasurement& m) const;
   // Solves the pose graph with the new loop edge (old keyframe -> the keyframe `cur_id` about
   // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame

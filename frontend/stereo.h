@@ -63,7 +63,9 @@ struct StereoOptions {
   int min_points_with_depth = 100;
   // Side of the SSD window along the row that refines u_right to sub-pixel (odd).
   int refine_window = 7;
-  double sigma_px = 1.0;      // Image noise (u, v), pixels.
+  // Image noise (u, v), pixels: each observation's sigma_px, the EKFs' measurement noise (the
+  // sliding window has its own, ba.sigma_px).
+  double sigma_px = 1.0;
   double sigma_disparity = 1.0;  // Disparity noise after refinement, pixels.
 
   bool IsValid(std::string* why) const;

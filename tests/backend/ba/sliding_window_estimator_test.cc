@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <iostream>
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <vector>
 
 namespace dala {
@@ -165,6 +167,72 @@ TEST(SlidingWindowEstimatorTest, ARestartedTrackIsFusedIntoItsLandmarkWhenAsked)
   EXPECT_GE(on.merged, 5);
   // A new id mapped in the last solve is merged at the next keyframe: at most a few left.
   EXPECT_LE(on.both_mapped, off.both_mapped / 4);
+}
+
+// The window weighs every observation at ba.sigma_px (observation_sigma_px), not at the sigma
+// the frontend gives it (stereo.sigma_px, the EKFs' noise). Every 10th point is seen 1.5 px to
+// the right in odd frames (exact elsewhere): against 0.35 px that is 4.3 sigma, beyond the
+// chi-square test's 2.45 sigma for (u, v), so those views leave the window; against 1 px, 1.5
+// sigma, they stay. Returned: the share of the window's odd-keyframe views of the displaced
+// points that it still holds, relative to the same share for the exact points (1 = all kept).
+double DisplacedViewsKept(double observation_sigma_px, double frontend_sigma_px) {
+  const MonoScene scene;
+  SlidingWindowEstimatorOptions options;
+  options.background_solve = false;
+  options.observation_sigma_px = observation_sigma_px;
+  SlidingWindowEstimator estimator(scene.rig, options);
+  const auto displaced = [](LandmarkId id) { return id.value % 10 == 0; };
+  std::map<KeyframeId, std::set<LandmarkId>> seen_by;
+  for (int frame = 0; frame < 10; ++frame) {
+    FrameMeasurement m = scene.Measure(frame);
+    for (FeatureObservation& o : m.observations) {
+      o.sigma_px = frontend_sigma_px;
+      if (frame % 2 == 1 && displaced(o.landmark)) o.uv.x() += 1.5;
+      seen_by[KeyframeId(frame)].insert(o.landmark);  // Every frame is a keyframe here.
+    }
+    const EstimatorOutput out = estimator.Add(m);
+    if (frame > 0) {
+      EXPECT_TRUE(out.valid) << "frame " << frame << ": " << out.note;
+    }
+  }
+  // Per group (displaced, exact): the odd window keyframes' views held / those that saw a
+  // landmark the window estimates.
+  int held[2] = {0, 0}, seen[2] = {0, 0};
+  const std::vector<KeyframeId> window = estimator.ba().WindowKeyframes();
+  for (int64_t i = 0; i < static_cast<int64_t>(scene.points.size()); ++i) {
+    const LandmarkId id(i);
+    if (!estimator.ba().LandmarkPosition(id)) continue;
+    const std::vector<KeyframeId> observing = estimator.ba().ObservingKeyframes(id);
+    const std::set<KeyframeId> has(observing.begin(), observing.end());
+    for (const KeyframeId k : window) {
+      if (k.value % 2 == 0 || !seen_by[k].count(id)) continue;
+      ++seen[displaced(id)];
+      held[displaced(id)] += has.count(k) ? 1 : 0;
+    }
+  }
+  EXPECT_GT(seen[1], 50);
+  EXPECT_GT(seen[0], 500);
+  return (static_cast<double>(held[1]) / seen[1]) / (static_cast<double>(held[0]) / seen[0]);
+}
+
+TEST(SlidingWindowEstimatorTest, TheWindowWeighsObservationsAtItsOwnSigma) {
+  const double at_one_px = DisplacedViewsKept(1.0, 0.35);
+  const double at_035_px = DisplacedViewsKept(0.35, 1.0);
+  std::cout << "displaced views kept (relative to exact ones): " << at_one_px << " at 1 px, "
+            << at_035_px << " at 0.35 px" << std::endl;
+  EXPECT_GT(at_one_px, 0.9);
+  EXPECT_LT(at_035_px, 0.5);
+}
+
+TEST(SlidingWindowEstimatorTest, ANonPositiveObservationSigmaIsRefused) {
+  SlidingWindowEstimatorOptions options;
+  EXPECT_TRUE(options.IsValid(nullptr)) << "the default";
+  for (const double sigma : {0.0, -1.0, std::nan("")}) {
+    options.observation_sigma_px = sigma;
+    std::string why;
+    EXPECT_FALSE(options.IsValid(&why)) << sigma;
+    EXPECT_NE(why.find("ba.sigma_px"), std::string::npos) << why;
+  }
 }
 
 }  // namespace
