@@ -16,6 +16,8 @@ import math
 import statistics
 import sys
 
+from markdown_block import write_block
+
 
 def load(path):
     runs = {}
@@ -63,15 +65,7 @@ def main():
     if not args.write:
         sys.stdout.write(text)
         return
-    with open(args.write) as f:
-        doc = f.read()
-    begin, end = "<!-- %s:begin -->\n" % args.marker, "<!-- %s:end -->" % args.marker
-    if begin not in doc or end not in doc:
-        sys.exit("%s has no %s ... %s markers" % (args.write, begin.strip(), end))
-    head, rest = doc.split(begin, 1)
-    tail = rest.split(end, 1)[1]
-    with open(args.write, "w") as f:
-        f.write(head + begin + text + end + tail)
+    write_block(args.write, args.marker, text)
 
 
 if __name__ == "__main__":
