@@ -19,16 +19,11 @@ import statistics
 import sys
 
 from markdown_block import write_block
+from run_lines import read_runs
 
 
 def load(path):
-    runs = {}
-    with open(path) as f:
-        for line in f:
-            if line.strip():
-                start, seed, ate = line.split()
-                runs[(int(start), int(seed))] = float(ate)
-    return runs
+    return read_runs(path, int)
 
 
 def row(mode, config, runs, base):

@@ -1,17 +1,23 @@
 """Rewrites the generated block of a markdown file: the text between `<!-- NAME:begin -->` and
-`<!-- NAME:end -->` (the tables of docs/results.md that scripts write from runs)."""
+`<!-- NAME:end -->` (the tables that scripts write from runs into docs/results.md and
+docs/benchmarks.md)."""
+import os
 import sys
 
 
 def write_block(path, name, text):
-    """Replaces the block NAME of the file at path with text; exits naming the file if the file
-    has no such markers."""
+    """Replaces the block NAME of the file at path with text (which should end with a newline),
+    atomically: a temporary file beside it, then renamed over it, so an interrupted write leaves
+    the old file. Exits naming the file if it has no such markers."""
     begin, end = "<!-- %s:begin -->\n" % name, "<!-- %s:end -->" % name
     with open(path) as f:
         doc = f.read()
     if begin not in doc or end not in doc:
-        sys.exit("%s has no %s ... %s markers" % (path, begin.strip(), end))
+        script = os.path.splitext(os.path.basename(sys.argv[0]))[0]
+        sys.exit("%s: %s has no %s ... %s markers" % (script, path, begin.strip(), end))
     head, rest = doc.split(begin, 1)
     tail = rest.split(end, 1)[1]
-    with open(path, "w") as f:
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
         f.write(head + begin + text + end + tail)
+    os.replace(tmp, path)

@@ -17,16 +17,11 @@ import statistics
 import sys
 
 from markdown_block import write_block
+from run_lines import read_runs
 
 
 def load(path):
-    runs = {}
-    with open(path) as f:
-        for line in f:
-            if line.strip():
-                name, draw, ate = line.split()
-                runs[(name, int(draw))] = float(ate)
-    return runs
+    return read_runs(path, str)
 
 
 def row(mode, preset, base, new, keys):

@@ -21,6 +21,8 @@ import subprocess
 import sys
 import tempfile
 
+from markdown_block import write_block
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 KITTI = os.path.join(ROOT, "..", "shared", "data", "kitti06_0000-0050")
 
@@ -77,17 +79,7 @@ def table(dala, repeats, workdir):
 
 
 def write(path, text):
-    begin, end = "<!-- timing:begin -->", "<!-- timing:end -->"
-    with open(path) as f:
-        doc = f.read()
-    if begin not in doc or end not in doc:
-        sys.exit("pipeline_timing: {} has no {} ... {} markers".format(path, begin, end))
-    head, rest = doc.split(begin, 1)
-    _, tail = rest.split(end, 1)
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        f.write(head + begin + "\n" + text + "\n" + end + tail)
-    os.replace(tmp, path)
+    write_block(path, "timing", text + "\n")
 
 
 def main():

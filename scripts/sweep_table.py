@@ -17,6 +17,8 @@ import json
 import statistics
 import sys
 
+from markdown_block import write_block
+
 LIMIT = 1.5
 
 
@@ -112,18 +114,7 @@ def main():
     if not args.write:
         sys.stdout.write(text)
         return
-    begin, end = "<!-- sweep:begin -->", "<!-- sweep:end -->"
-    with open(args.write) as f:
-        doc = f.read()
-    if begin not in doc or end not in doc:
-        sys.exit(f"sweep_table: {args.write} has no {begin} ... {end} markers")
-    head, rest = doc.split(begin, 1)
-    _, tail = rest.split(end, 1)
-    tmp = args.write + ".tmp"
-    with open(tmp, "w") as f:
-        f.write(head + begin + "\n" + text + end + tail)
-    import os
-    os.replace(tmp, args.write)
+    write_block(args.write, "sweep", text)
 
 
 if __name__ == "__main__":
