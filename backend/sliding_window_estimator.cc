@@ -46,7 +46,10 @@ bool SlidingWindowEstimatorOptions::IsValid(std::string* why) const {
   if (max_new_landmarks_per_keyframe < 10)
     return fail("ba.max_new_landmarks_per_keyframe must be >= 10");
   if (grid_cols < 1 || grid_rows < 1) return fail("ba.grid_cols and ba.grid_rows must be >= 1");
-  if (!(observation_sigma_px > 0)) return fail("ba.sigma_px must be > 0");
+  if (!(observation_sigma_px > 0) && observation_sigma_px != -1.0) {
+    return fail("ba.sigma_px must be > 0, or -1 (by mode)");
+  }
+  if (!(tracking_sigma_px > 0)) return fail("ba.tracking_sigma_px must be > 0");
   if (mono_reinit_after_lost_frames < 1)
     return fail("ba.mono_reinit_after_lost_frames must be >= 1");
   if (refine_frames != "mono" && refine_frames != "always" && refine_frames != "off") {
@@ -88,15 +91,28 @@ StereoIntrinsics IntrinsicsOf(const StereoRig& rig, double disparity_offset_px =
 // See the class comment, "Frames between keyframes": ~20 KB each (a frame's observations).
 constexpr size_t kMaxWaitingFrames = 200;
 
-}  // namespace
-
-BaObservation SlidingWindowEstimator::ToBa(const FeatureObservation& o) const {
+BaObservation ToBa(const FeatureObservation& o, double sigma_px) {
   BaObservation b;
   b.landmark = o.landmark;
   b.uv = o.uv;
   b.u_right = o.u_right;
-  b.sigma_px = options_.observation_sigma_px;
+  b.sigma_px = sigma_px;
   return b;
+}
+
+}  // namespace
+
+double SlidingWindowEstimatorOptions::WindowSigmaPx(const StereoRig& rig) const {
+  if (observation_sigma_px > 0) return observation_sigma_px;
+  return rig.is_stereo() ? 1.0 : 0.35;
+}
+
+BaObservation SlidingWindowEstimator::AsKeyframeObservation(const FeatureObservation& o) const {
+  return ToBa(o, options_.WindowSigmaPx(rig_));
+}
+
+BaObservation SlidingWindowEstimator::AsFrameObservation(const FeatureObservation& o) const {
+  return ToBa(o, options_.tracking_sigma_px);
 }
 
 SlidingWindowEstimator::SlidingWindowEstimator(const StereoRig& rig,
@@ -117,7 +133,7 @@ std::vector<BaObservation> SlidingWindowEstimator::WindowObservations(
   std::vector<BaObservation> out;
   for (const FeatureObservation& o : m.observations) {
     if (!unconfirmed_loop_landmarks_.count(o.landmark) && ba_.LandmarkPosition(o.landmark)) {
-      out.push_back(ToBa(o));
+      out.push_back(AsFrameObservation(o));
     }
   }
   return out;
@@ -141,7 +157,7 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
   for (const FeatureObservation& o : m.observations) {
     if (unconfirmed_loop_landmarks_.count(o.landmark)) continue;
     if (landmark_observations_.count(o.landmark)) {
-      out.push_back(ToBa(o));
+      out.push_back(AsKeyframeObservation(o));
       ++cell_count[cell_of(o.uv)];
     } else if (stereo ? o.has_stereo() : last_keyframe_observations_.count(o.landmark) > 0) {
       fresh.push_back(&o);
@@ -160,7 +176,7 @@ std::vector<BaObservation> SlidingWindowEstimator::SelectKeyframeObservations(
     if (n >= per_cell + 2) continue;
     ++n;
     ++added;
-    out.push_back(ToBa(*o));
+    out.push_back(AsKeyframeObservation(*o));
     if (stereo) {
       // The frontend triangulated d = u - u_right; the rig's model has d + offset, so the
       // depth is d / (d + offset) of the frontend's (x and y scale with it).
@@ -225,7 +241,7 @@ std::optional<Pose> SlidingWindowEstimator::PnpPose(const FrameMeasurement& m,
     if (!p_w) continue;
     object.emplace_back(p_w->x(), p_w->y(), p_w->z());
     image.emplace_back(o.uv.x(), o.uv.y());
-    observations.push_back(ToBa(o));
+    observations.push_back(AsFrameObservation(o));
   }
   if (static_cast<int>(object.size()) < min_inliers) return std::nullopt;
   cv::Mat K;
@@ -278,8 +294,8 @@ std::optional<Pose> SlidingWindowEstimator::BridgeFromLastKeyframe(const FrameMe
       last_tracked_->velocity_w.norm() * 1e-9 * static_cast<double>(m.t_ns - t_kf);
   std::string why;
   const std::optional<KeyframeBridge> bridge =
-      BridgeFromKeyframe(rig_.left, KeyframePoseNow(last_keyframe_), last_keyframe_observations_,
-                         m, distance, BridgeTwoViewOptions(), &why);
+      BridgeFromKeyframe(rig_.left, KeyframePoseNow(last_keyframe_), last_keyframe_observations_, m,
+                         distance, BridgeTwoViewOptions(), &why);
   if (!bridge) {
     std::ostringstream os;
     os << ", no bridge from keyframe " << last_keyframe_ << " (" << why << ")";
@@ -426,7 +442,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
     kf.T_w_c = T_w_c;
     for (const FeatureObservation& o : f.observations) {
       if (!init.p_ref.count(o.landmark)) continue;
-      kf.observations.push_back(ToBa(o));
+      kf.observations.push_back(AsKeyframeObservation(o));
       ++landmark_observations_[o.landmark];
     }
     AddToWindow(kf, f);
@@ -481,7 +497,7 @@ void SlidingWindowEstimator::RememberLastKeyframe(KeyframeId id, const FrameMeas
   last_keyframe_ = id;
   last_keyframe_observations_.clear();
   for (const FeatureObservation& o : m.observations) {
-    last_keyframe_observations_[o.landmark] = ToBa(o);
+    last_keyframe_observations_[o.landmark] = AsKeyframeObservation(o);
   }
 }
 
@@ -492,7 +508,7 @@ void SlidingWindowEstimator::AddToWindow(const BaKeyframe& kf, const FrameMeasur
   if (KeepsObservationArchive()) {
     for (const FeatureObservation& o : m.observations) {
       if (!unconfirmed_loop_landmarks_.count(o.landmark)) {
-        observation_archive_.emplace_back(kf.id, ToBa(o));
+        observation_archive_.emplace_back(kf.id, AsKeyframeObservation(o));
       }
     }
   }
@@ -877,7 +893,8 @@ void SlidingWindowEstimator::DeferFrameRefinement(size_t index, const FrameMeasu
   WaitingFrame waiting;
   waiting.index = index;
   for (const FeatureObservation& o : m.observations) {
-    if (!unconfirmed_loop_landmarks_.count(o.landmark)) waiting.observations.push_back(ToBa(o));
+    if (!unconfirmed_loop_landmarks_.count(o.landmark))
+      waiting.observations.push_back(AsFrameObservation(o));
   }
   waiting_frames_.push_back(std::move(waiting));
   if (waiting_frames_.size() > kMaxWaitingFrames) {
@@ -912,7 +929,7 @@ void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
         if (it == map_points_.end()) return std::nullopt;
         return it->second;
       },
-      T_w_kf * f.T_kf_c, options_.pose_only);
+      T_w_kf* f.T_kf_c, options_.pose_only);
   if (r.status == PoseOnlyStatus::kOk) f.T_kf_c = T_w_kf.inverse() * r.T_w_c;
 }
 

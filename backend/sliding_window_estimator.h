@@ -76,14 +76,15 @@
 // Frames between keyframes (options.refine_frames, default with one camera): a frame that is not
 // a keyframe is tracked once, pose-only against the window's landmarks of that moment, and never
 // enters the window, while the later keyframes still refine those landmarks (a mono landmark
-// starts from the few views it has when it enters, often 1-2 degrees apart). Once the frame's keyframe has left the window
-// (and at Refine, for the last ones) the frame is tracked again by the same pose-only solver from
-// its stored pose, on all its observations of landmarks that have an estimate by then, and T_kf_c
-// takes the result. Tracking, keyframes and the map are unchanged; only the frames' own poses move.
-// At most kMaxWaitingFrames wait (a camera that stands still makes no keyframe): beyond, the
-// oldest is refined at once. Measured (docs/monocular.md, "Frames between keyframes"): with one
-// camera 8 of 10 KITTI start frames gain (one equal, one 0.3 mm worse) and no rendered run
-// loses; stereo does (its frames measure depth themselves), so it is off there by default.
+// starts from the few views it has when it enters, often 1-2 degrees apart). Once the frame's
+// keyframe has left the window (and at Refine, for the last ones) the frame is tracked again by the
+// same pose-only solver from its stored pose, on all its observations of landmarks that have an
+// estimate by then, and T_kf_c takes the result. Tracking, keyframes and the map are unchanged;
+// only the frames' own poses move. At most kMaxWaitingFrames wait (a camera that stands still makes
+// no keyframe): beyond, the oldest is refined at once. Measured (docs/monocular.md, "Frames between
+// keyframes"): with one camera 8 of 10 KITTI start frames gain (one equal, one 0.3 mm worse) and no
+// rendered run loses; stereo does (its frames measure depth themselves), so it is off there by
+// default.
 //
 // Culling (options.cull_held_keyframes, default on): a keyframe whose place an older keyframe
 // already holds (the frontend verified the old keyframe's view in it: matcher, PnP and at least
@@ -180,14 +181,20 @@ struct SlidingWindowEstimatorOptions {
   // left the window (see the class comment, "Frames between keyframes"). "mono" (default): with
   // one camera only; "always"; "off".
   std::string refine_frames = "mono";
-  // The pixel sigma of every image observation the window uses (its solves, the pose-only
-  // tracking, the chi-square outlier tests, the PnP recovery's refinement, the global BA): the
-  // Huber loss bends at ba.loss_scale sigma and the test rejects a residual beyond
-  // sqrt(chi2_95(dof)) sigma. The frontend's stereo.sigma_px (1 px) is the EKFs' measurement
-  // noise and the stereo triangulation's covariance. Smaller values (0.35-0.5) improve KITTI's
-  // images but lose one camera's tracking under fast forward motion (docs/results.md,
-  // "ba.sigma_px"), so the default stays at 1.
-  double observation_sigma_px = 1.0;
+  // The pixel sigma of the keyframes' observations in the window's solves and the global BA:
+  // their Huber loss bends at ba.loss_scale sigma and the outlier test rejects a residual beyond
+  // sqrt(chi2_95(dof)) sigma. -1: by mode, 0.35 px with one camera, 1 px with a stereo rig
+  // (docs/results.md, "ba.sigma_px"). The frontend's stereo.sigma_px (1 px) is the EKFs'
+  // measurement noise and the stereo triangulation's covariance.
+  double observation_sigma_px = -1.0;
+  // The pixel sigma of a frame's observations when the frame is placed against the window: the
+  // pose-only tracking and its outlier test, the PnP recovery's refinement, the refinement of
+  // frames between keyframes. Wider than the window's: a fast forward frame's constant-velocity
+  // guess against a young map is not within a fraction of a pixel, and a tight test would drop
+  // nearly every observation and lose the frame.
+  double tracking_sigma_px = 1.0;
+  // observation_sigma_px with -1 resolved for the rig.
+  double WindowSigmaPx(const StereoRig& rig) const;
   MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
   // The order of the correspondences handed to OpenCV's RANSAC in the mono PnP recovery, which
   // is what seeds its draws (core/ransac_order.h): 0 as given.
@@ -294,8 +301,10 @@ class SlidingWindowEstimator : public Estimator {
   Pose KeyframePoseNow(KeyframeId id) const;
   std::vector<BaObservation> SelectKeyframeObservations(const FrameMeasurement& m,
                                                         const Pose& T_w_c);
-  // A frontend observation as the window uses it, at options_.observation_sigma_px.
-  BaObservation ToBa(const FeatureObservation& o) const;
+  // A frontend observation as a keyframe's in the window's solves (WindowSigmaPx), and as a
+  // frame's placed against the window (tracking_sigma_px).
+  BaObservation AsKeyframeObservation(const FeatureObservation& o) const;
+  BaObservation AsFrameObservation(const FeatureObservation& o) const;
   std::vector<BaObservation> WindowObservations(const FrameMeasurement& m) const;
   // Solves the pose graph with the new loop edge (old keyframe -> the keyframe `cur_id` about
   // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame
@@ -367,7 +376,7 @@ class SlidingWindowEstimator : public Estimator {
   SlidingWindowEstimatorOptions options_;
   SlidingWindowBa ba_;
   std::vector<FrameRecord> frames_;
-  std::deque<WaitingFrame> waiting_frames_;  // Oldest first (see DeferFrameRefinement).
+  std::deque<WaitingFrame> waiting_frames_;    // Oldest first (see DeferFrameRefinement).
   std::map<KeyframeId, Pose> keyframe_poses_;  // Last estimate of every keyframe.
   std::map<LandmarkId, int> landmark_observations_;
   std::map<LandmarkId, Eigen::Vector3d> map_points_;  // Last estimate of every landmark.

@@ -202,6 +202,7 @@ void VisitBa(SlidingWindowEstimatorOptions* b, OptionVisitor* v) {
   v->Field("ba", "max_solver_time_in_seconds", &b->ba.max_solver_time_in_seconds);
   v->Field("ba", "loss_scale", &b->ba.loss_scale);
   v->Field("ba", "sigma_px", &b->observation_sigma_px);
+  v->Field("ba", "tracking_sigma_px", &b->tracking_sigma_px);
   v->Field("ba", "min_triangulation_parallax_deg", &b->ba.min_triangulation_parallax_deg);
   v->Field("ba", "max_new_landmarks_per_keyframe", &b->max_new_landmarks_per_keyframe);
   v->Field("ba", "background_solve", &b->background_solve);

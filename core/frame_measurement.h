@@ -23,7 +23,7 @@ struct FeatureObservation {
   LandmarkId landmark;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // Left rectified image, pixels.
   // Std. dev. of uv (and of u_right), pixels: the EKFs' noise (the sliding window uses its
-  // own, SlidingWindowEstimatorOptions::observation_sigma_px).
+  // own, SlidingWindowEstimatorOptions::observation_sigma_px and tracking_sigma_px).
   double sigma_px = 1.0;
   // Stereo only: the right-image abscissa (same row, rectified) and the triangulated point
   // in the current left camera frame with its first-order covariance.

@@ -73,7 +73,7 @@ TEST(GlobalBaE2e, RefinesEveryKeyframeStereoAndMono) {
     std::cout << "[ measured ] " << mode << " rover 150: ATE " << online << " m online, " << refined
               << " m after the global BA (" << run.refinement.report << ")" << std::endl;
     testing::ExpectWithinBound(std::string("ba/") + mode + " rover 150 after the global BA, ATE", refined,
-                               std::string(mode) == "mono" ? 0.0234 : 0.00479, "m");
+                               std::string(mode) == "mono" ? 0.0134 : 0.00479, "m");
     if (std::string(mode) == "stereo") {
       EXPECT_LE(refined, online);
     }

@@ -14,10 +14,13 @@
 // - The BA from the left images only (one camera, Sim(3)): ATE 0.0311 m (docs/monocular.md),
 //   and the scale along the path (each tenth of it aligned on its own,
 //   core/eval/scale_along_path.h): 0.990 to 1.006, a spread max / min - 1 of 0.0161; bounds 1.5x.
+//   The same from start frames 0..9: median 0.0271 m, worst 0.0435 m (frame 0, 1.4x the best
+//   run above: one run moves that much with the RANSAC draws, docs/results.md "ba.sigma_px");
+//   bounds 1.5x each.
 // - The BA from every third left image (about 3 m per frame, a motorway's speed at 10 Hz), from
 //   frames 0, 1 and 2: the first pose by frame 1 of each (without matching free of the
 //   rotation-only prediction while the map does not exist: frames 4, 10 and 14), no frame lost
-//   after it; worst Sim(3) ATE 0.2568 m over ~55 m, bound 1.5x.
+//   after it; worst Sim(3) ATE 0.0556 m over ~55 m, bound 1.5x.
 // The path (60 m) is shorter than KITTI's shortest segment (100 m): no segment errors here.
 #include <gtest/gtest.h>
 
@@ -67,24 +70,36 @@ TEST(KittiStereoE2e, AteWithinOnePointFiveTimesTheDocumentedValue) {
       << s["disparity_offset"];
 }
 
-TEST(KittiStereoE2e, EveryStartFrameWithinOnePointFiveTimesTheDocumentedSpread) {
-  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+// The ATE of the run from each start frame 0..9 (`extra` picks the mode), ascending.
+std::vector<double> AtesOverStartFrames(const std::string& extra, const std::string& name) {
   std::vector<double> ates;
   for (int start = 0; start < 10; ++start) {
-    const std::string out = ::testing::TempDir() + "/dala_kitti_start" + std::to_string(start);
-    const nlohmann::json report = RunKitti("--first_frame " + std::to_string(start), out);
-    ASSERT_FALSE(report.is_discarded()) << "no report.json in " << out;
+    const std::string out =
+        ::testing::TempDir() + "/dala_kitti_" + name + "_start" + std::to_string(start);
+    const nlohmann::json report = RunKitti(extra + " --first_frame " + std::to_string(start), out);
+    if (report.is_discarded()) {
+      ADD_FAILURE() << "no report.json in " << out;
+      return {};
+    }
     const double ate = report["summary"]["ate"]["rmse"].get<double>();
-    std::cout << "[ measured ] start " << start << ": ATE " << ate << " m" << std::endl;
+    std::cout << "[ measured ] " << name << " start " << start << ": ATE " << ate << " m"
+              << std::endl;
     ates.push_back(ate);
   }
   std::sort(ates.begin(), ates.end());
-  const double median = 0.5 * (ates[4] + ates[5]);
-  std::cout << "[ measured ] median " << median << " m, worst " << ates.back() << " m" << std::endl;
+  std::cout << "[ measured ] " << name << " median " << 0.5 * (ates[4] + ates[5]) << " m, worst "
+            << ates.back() << " m" << std::endl;
+  return ates;
+}
+
+TEST(KittiStereoE2e, EveryStartFrameWithinOnePointFiveTimesTheDocumentedSpread) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+  const std::vector<double> ates = AtesOverStartFrames("", "stereo");
+  ASSERT_EQ(ates.size(), 10u);
   testing::ExpectWithinBound("ba/stereo real KITTI 06 0-50, worst ATE over start frames 0..9",
                              ates.back(), 0.0276, "m");
   testing::ExpectWithinBound("ba/stereo real KITTI 06 0-50, median ATE over start frames 0..9",
-                             median, 0.0232, "m");
+                             0.5 * (ates[4] + ates[5]), 0.0232, "m");
 }
 
 TEST(KittiStereoE2e, StereoEkfWithinOnePointFiveTimesTheDocumentedValue) {
@@ -115,11 +130,22 @@ TEST(KittiMonoE2e, BaFromTheLeftImagesKeepsItsScaleAlongThePath) {
   const double spread = scale["max"].get<double>() / scale["min"].get<double>() - 1.0;
   std::cout << "[ measured ] ba/mono KITTI 06 0-50: Sim(3) ATE " << ate << " m, scale along the "
             << "path " << scale["min"] << " to " << scale["max"] << std::endl;
-  testing::ExpectWithinBound("ba/mono one camera real KITTI 06 0-50 from frame 0, ATE", ate,
-                             0.0311, "m");
+  testing::ExpectWithinBound("ba/mono one camera real KITTI 06 0-50 from frame 0, ATE", ate, 0.0311,
+                             "m");
+  testing::ExpectWithinBound("ba/mono one camera real KITTI 06 0-50, scale spread along the path",
+                             spread, 0.0161, "(max / min - 1)");
+}
+
+TEST(KittiMonoE2e, EveryStartFrameWithinOnePointFiveTimesTheDocumentedSpread) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+  const std::vector<double> ates = AtesOverStartFrames("--mode mono", "mono");
+  ASSERT_EQ(ates.size(), 10u);
   testing::ExpectWithinBound(
-      "ba/mono one camera real KITTI 06 0-50, scale spread along the path", spread, 0.0161,
-      "(max / min - 1)");
+      "ba/mono one camera real KITTI 06 0-50, worst ATE over start frames 0..9", ates.back(),
+      0.0435, "m");
+  testing::ExpectWithinBound(
+      "ba/mono one camera real KITTI 06 0-50, median ATE over start frames 0..9",
+      0.5 * (ates[4] + ates[5]), 0.0271, "m");
 }
 
 // KITTI 06 0-50 with only every third frame, from frame `offset` on, in a KITTI folder of
@@ -180,7 +206,7 @@ TEST(KittiMonoE2e, FastForwardMotionStartsWithinAFrame) {
     worst_ate = std::max(worst_ate, ate);
   }
   testing::ExpectWithinBound("ba/mono KITTI 06 every third frame, worst of 3 offsets, ATE",
-                             worst_ate, 0.2568, "m");
+                             worst_ate, 0.0556, "m");
 }
 
 TEST(KittiStereoE2e, MonoEkfFromTheLeftImagesDoesNotCollapse) {
@@ -191,8 +217,8 @@ TEST(KittiStereoE2e, MonoEkfFromTheLeftImagesDoesNotCollapse) {
   const nlohmann::json& s = report["summary"];
   const double ate = s["ate"]["rmse"].get<double>();
   const double rpe = s["rpe"]["trans_rmse"].get<double>();
-  std::cout << "[ measured ] ekf/mono (one camera) KITTI 06 0-50: Sim(3) ATE " << ate
-            << " m, RPE " << rpe << " m, " << s["frames_with_pose"] << " poses" << std::endl;
+  std::cout << "[ measured ] ekf/mono (one camera) KITTI 06 0-50: Sim(3) ATE " << ate << " m, RPE "
+            << rpe << " m, " << s["frames_with_pose"] << " poses" << std::endl;
   EXPECT_EQ(s["scale_source"].get<std::string>(), "arbitrary (monocular)");
   EXPECT_GE(s["frames_with_pose"].get<int>(), 50);
   EXPECT_LT(ate, 0.5);

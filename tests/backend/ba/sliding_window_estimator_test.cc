@@ -115,9 +115,9 @@ TEST(SlidingWindowEstimatorTest, NewMonoLandmarksTakeEveryWindowKeyframesView) {
 // the old one, and the later frames' observations under the new id reach the old landmark;
 // without it both ids stay landmarks.
 struct FusionRun {
-  int merged = 0;        // Broken points whose new id has no position and whose old id is seen
-                         // by keyframes from both sides of the break.
-  int both_mapped = 0;   // Broken points with a position under both ids.
+  int merged = 0;       // Broken points whose new id has no position and whose old id is seen
+                        // by keyframes from both sides of the break.
+  int both_mapped = 0;  // Broken points with a position under both ids.
 };
 
 FusionRun RunWithBrokenTracks(double fuse_radius_px) {
@@ -129,7 +129,7 @@ FusionRun RunWithBrokenTracks(double fuse_radius_px) {
   constexpr int kBreak = 8;
   constexpr int64_t kRestarted = 10000;
   const auto broken = [](int64_t i) { return i % 5 == 0; };  // 120 of the 600 points.
-  for (int frame = 0; frame < 12; ++frame) {  // The last window (8): keyframes 4-11.
+  for (int frame = 0; frame < 12; ++frame) {                 // The last window (8): keyframes 4-11.
     FrameMeasurement m = scene.Measure(frame);
     for (FeatureObservation& o : m.observations) {
       if (frame >= kBreak && broken(o.landmark.value)) {
@@ -169,9 +169,9 @@ TEST(SlidingWindowEstimatorTest, ARestartedTrackIsFusedIntoItsLandmarkWhenAsked)
   EXPECT_LE(on.both_mapped, off.both_mapped / 4);
 }
 
-// The window weighs every observation at ba.sigma_px (observation_sigma_px), not at the sigma
-// the frontend gives it (stereo.sigma_px, the EKFs' noise). Every 10th point is seen 1.5 px to
-// the right in odd frames (exact elsewhere): against 0.35 px that is 4.3 sigma, beyond the
+// The window weighs its keyframes' observations at ba.sigma_px (observation_sigma_px), not at the
+// sigma the frontend gives it (stereo.sigma_px, the EKFs' noise). Every 10th point is seen 1.5 px
+// to the right in odd frames (exact elsewhere): against 0.35 px that is 4.3 sigma, beyond the
 // chi-square test's 2.45 sigma for (u, v), so those views leave the window; against 1 px, 1.5
 // sigma, they stay. Returned: the share of the window's odd-keyframe views of the displaced
 // points that it still holds, relative to the same share for the exact points (1 = all kept).
@@ -227,12 +227,36 @@ TEST(SlidingWindowEstimatorTest, TheWindowWeighsObservationsAtItsOwnSigma) {
 TEST(SlidingWindowEstimatorTest, ANonPositiveObservationSigmaIsRefused) {
   SlidingWindowEstimatorOptions options;
   EXPECT_TRUE(options.IsValid(nullptr)) << "the default";
-  for (const double sigma : {0.0, -1.0, std::nan("")}) {
+  for (const double sigma : {0.0, -0.5, -2.0, std::nan("")}) {
     options.observation_sigma_px = sigma;
     std::string why;
     EXPECT_FALSE(options.IsValid(&why)) << sigma;
     EXPECT_NE(why.find("ba.sigma_px"), std::string::npos) << why;
   }
+  options = SlidingWindowEstimatorOptions();
+  for (const double sigma : {0.0, -1.0, std::nan("")}) {
+    options.tracking_sigma_px = sigma;
+    std::string why;
+    EXPECT_FALSE(options.IsValid(&why)) << sigma;
+    EXPECT_NE(why.find("ba.tracking_sigma_px"), std::string::npos) << why;
+  }
+}
+
+// -1 (the default) is 0.35 px with one camera, 1 px with a stereo rig; a positive value is
+// itself in both.
+TEST(SlidingWindowEstimatorTest, TheWindowSigmaByModeResolvesPerRig) {
+  const MonoScene scene;
+  StereoRig stereo = scene.rig;
+  stereo.baseline = 0.5;
+  ASSERT_FALSE(scene.rig.is_stereo());
+  ASSERT_TRUE(stereo.is_stereo());
+  SlidingWindowEstimatorOptions options;
+  EXPECT_EQ(options.observation_sigma_px, -1.0);
+  EXPECT_EQ(options.WindowSigmaPx(scene.rig), 0.35);
+  EXPECT_EQ(options.WindowSigmaPx(stereo), 1.0);
+  options.observation_sigma_px = 0.6;
+  EXPECT_EQ(options.WindowSigmaPx(scene.rig), 0.6);
+  EXPECT_EQ(options.WindowSigmaPx(stereo), 0.6);
 }
 
 }  // namespace
