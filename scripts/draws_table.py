@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The RANSAC-draws table of docs/results.md: KITTI 06 from ten start frames x nine draws.
 
-    python3 scripts/draws_table.py DIR [--write docs/results.md]
+    python3 scripts/draws_table.py DIR [--write docs/results.md [--marker NAME]]
 
 DIR holds one file per configuration, MODE.CONFIG.txt (MODE mono or stereo; CONFIG "defaults"
 or the --set assignment, e.g. mono.stereo.sigma_px=0.5.txt), with one line per run:
@@ -10,7 +10,8 @@ docs/results.md has the loop that writes them). Per configuration: the median, 9
 and maximum over its runs, the share at or under 0.030 m, the median over the seeds of each
 seed's ten-start median and worst, and the mean of log(ATE / the defaults' ATE) over the same
 (start, seed) pairs with its standard error (in %). With --write, the table replaces the text
-between `<!-- draws:begin -->` and `<!-- draws:end -->` of that file. Standard library only.
+between `<!-- NAME:begin -->` and `<!-- NAME:end -->` of that file (NAME: --marker, default
+draws). Standard library only.
 """
 import argparse
 import math
@@ -64,12 +65,13 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("directory")
     parser.add_argument("--write", metavar="MARKDOWN")
+    parser.add_argument("--marker", default="draws")
     args = parser.parse_args()
     text = table(args.directory)
     if not args.write:
         sys.stdout.write(text)
         return
-    write_block(args.write, "draws", text)
+    write_block(args.write, args.marker, text)
 
 
 if __name__ == "__main__":
