@@ -17,9 +17,8 @@ import argparse
 import math
 import os
 import statistics
-import sys
 
-from markdown_block import write_block
+from markdown_block import print_or_write
 from run_lines import read_runs
 
 
@@ -68,10 +67,7 @@ def main():
     parser.add_argument("--marker", default="draws")
     args = parser.parse_args()
     text = table(args.directory)
-    if not args.write:
-        sys.stdout.write(text)
-        return
-    write_block(args.write, args.marker, text)
+    print_or_write(text, args.write, args.marker)
 
 
 if __name__ == "__main__":

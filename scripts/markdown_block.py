@@ -21,3 +21,12 @@ def write_block(path, name, text):
     with open(tmp, "w") as f:
         f.write(head + begin + text + end + tail)
     os.replace(tmp, path)
+
+
+def print_or_write(text, path, name):
+    """The table scripts' output: text on stdout without a path (--write not given), else the
+    block NAME of the file at path replaced with it (write_block)."""
+    if path:
+        write_block(path, name, text)
+    else:
+        sys.stdout.write(text)

@@ -16,7 +16,7 @@ import math
 import statistics
 import sys
 
-from markdown_block import write_block
+from markdown_block import print_or_write
 from run_lines import read_runs
 
 
@@ -57,10 +57,7 @@ def main():
     parser.add_argument("--marker", default="rendered-sigma")
     args = parser.parse_args()
     text = table(args.specs)
-    if not args.write:
-        sys.stdout.write(text)
-        return
-    write_block(args.write, args.marker, text)
+    print_or_write(text, args.write, args.marker)
 
 
 if __name__ == "__main__":

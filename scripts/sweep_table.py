@@ -17,7 +17,7 @@ import json
 import statistics
 import sys
 
-from markdown_block import write_block
+from markdown_block import print_or_write
 
 LIMIT = 1.5
 
@@ -111,10 +111,7 @@ def main():
     except (OSError, ValueError) as e:
         sys.exit(f"sweep_table: cannot read {args.results}: {e}")
     text = table(results)
-    if not args.write:
-        sys.stdout.write(text)
-        return
-    write_block(args.write, "sweep", text)
+    print_or_write(text, args.write, "sweep")
 
 
 if __name__ == "__main__":
