@@ -893,8 +893,9 @@ void SlidingWindowEstimator::DeferFrameRefinement(size_t index, const FrameMeasu
   WaitingFrame waiting;
   waiting.index = index;
   for (const FeatureObservation& o : m.observations) {
-    if (!unconfirmed_loop_landmarks_.count(o.landmark))
+    if (!unconfirmed_loop_landmarks_.count(o.landmark)) {
       waiting.observations.push_back(AsFrameObservation(o));
+    }
   }
   waiting_frames_.push_back(std::move(waiting));
   if (waiting_frames_.size() > kMaxWaitingFrames) {
@@ -929,7 +930,7 @@ void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
         if (it == map_points_.end()) return std::nullopt;
         return it->second;
       },
-      T_w_kf* f.T_kf_c, options_.pose_only);
+      T_w_kf * f.T_kf_c, options_.pose_only);
   if (r.status == PoseOnlyStatus::kOk) f.T_kf_c = T_w_kf.inverse() * r.T_w_c;
 }
 

@@ -129,7 +129,7 @@ FusionRun RunWithBrokenTracks(double fuse_radius_px) {
   constexpr int kBreak = 8;
   constexpr int64_t kRestarted = 10000;
   const auto broken = [](int64_t i) { return i % 5 == 0; };  // 120 of the 600 points.
-  for (int frame = 0; frame < 12; ++frame) {                 // The last window (8): keyframes 4-11.
+  for (int frame = 0; frame < 12; ++frame) {  // The last window (8): keyframes 4-11.
     FrameMeasurement m = scene.Measure(frame);
     for (FeatureObservation& o : m.observations) {
       if (frame >= kBreak && broken(o.landmark.value)) {
