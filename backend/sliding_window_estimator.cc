@@ -104,7 +104,7 @@ BaObservation ToBa(const FeatureObservation& o, double sigma_px) {
 
 double SlidingWindowEstimatorOptions::WindowSigmaPx(const StereoRig& rig) const {
   if (observation_sigma_px > 0) return observation_sigma_px;
-  return rig.is_stereo() ? 1.0 : 0.35;
+  return rig.is_stereo() ? 0.5 : 0.35;
 }
 
 BaObservation SlidingWindowEstimator::AsKeyframeObservation(const FeatureObservation& o) const {

@@ -183,7 +183,7 @@ struct SlidingWindowEstimatorOptions {
   std::string refine_frames = "mono";
   // The pixel sigma of the keyframes' observations in the window's solves and the global BA:
   // their Huber loss bends at ba.loss_scale sigma and the outlier test rejects a residual beyond
-  // sqrt(chi2_95(dof)) sigma. -1: by mode, 0.35 px with one camera, 1 px with a stereo rig
+  // sqrt(chi2_95(dof)) sigma. -1: by mode, 0.35 px with one camera, 0.5 px with a stereo rig
   // (docs/results.md, "ba.sigma_px"). The frontend's stereo.sigma_px (1 px) is the EKFs'
   // measurement noise and the stereo triangulation's covariance.
   double observation_sigma_px = -1.0;

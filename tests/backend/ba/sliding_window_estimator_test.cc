@@ -242,7 +242,7 @@ TEST(SlidingWindowEstimatorTest, ANonPositiveObservationSigmaIsRefused) {
   }
 }
 
-// -1 (the default) is 0.35 px with one camera, 1 px with a stereo rig; a positive value is
+// -1 (the default) is 0.35 px with one camera, 0.5 px with a stereo rig; a positive value is
 // itself in both.
 TEST(SlidingWindowEstimatorTest, TheWindowSigmaByModeResolvesPerRig) {
   const MonoScene scene;
@@ -253,7 +253,7 @@ TEST(SlidingWindowEstimatorTest, TheWindowSigmaByModeResolvesPerRig) {
   SlidingWindowEstimatorOptions options;
   EXPECT_EQ(options.observation_sigma_px, -1.0);
   EXPECT_EQ(options.WindowSigmaPx(scene.rig), 0.35);
-  EXPECT_EQ(options.WindowSigmaPx(stereo), 1.0);
+  EXPECT_EQ(options.WindowSigmaPx(stereo), 0.5);
   options.observation_sigma_px = 0.6;
   EXPECT_EQ(options.WindowSigmaPx(scene.rig), 0.6);
   EXPECT_EQ(options.WindowSigmaPx(stereo), 0.6);
