@@ -159,6 +159,16 @@ bool PlaceRecognition::WithinGate(const KeyframeEntry& old, const KeyframeEntry&
   return (t_w_cur - query.T_w_c.translation()).norm() <= radius;
 }
 
+bool PlaceRecognition::LeftAndCameBack(const KeyframeEntry& old,
+                                       const KeyframeEntry& query) const {
+  // Stereo: a camera that travelled less than twice the gate's radius since the old keyframe
+  // cannot have left the radius around it and come back; the old view is the current map's, and
+  // "closing" it can only bend the window (a slow rig at 30 fps passes min_frame_gap within
+  // 4 m; docs/results.md, stop 48). One camera's path has no metric unit: min_frame_gap alone.
+  if (!options_.spatial_gate || !rig_.is_stereo()) return true;
+  return std::abs(query.path_length_m - old.path_length_m) >= 2.0 * options_.gate_radius_m;
+}
+
 std::optional<PlaceMatch> PlaceRecognition::Verify(
     const KeyframeEntry& old, const KeyframeEntry& query, const DetectedImage& detection,
     const std::vector<std::optional<StereoPoint>>& stereo, const std::vector<LandmarkId>& landmark,
@@ -330,6 +340,10 @@ std::vector<std::pair<double, const KeyframeEntry*>> PlaceRecognition::RankCandi
       break;  // Time order: the rest are younger still.
     }
     ++stats_.searched;
+    if (!relocalisation && !LeftAndCameBack(e, query)) {
+      ++stats_.gated_out;
+      continue;
+    }
     if (!relocalisation && !WithinGate(e, query, e.T_w_c.translation())) {
       ++stats_.gated_out;
       continue;

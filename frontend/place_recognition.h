@@ -15,7 +15,10 @@
 //    comparison, and a rover revisiting a place follows nearly the same viewpoint, which is
 //    the case a thumbnail handles well. The robust matcher (which is viewpoint tolerant) and the
 //    PnP do the real verification; the thumbnail only ranks.
-//    Excluded: keyframes less than min_frame_gap frames old, and (spatial gate, the known
+//    Excluded: keyframes less than min_frame_gap frames old; with a stereo rig, keyframes
+//    fewer than 2 x gate_radius_m metres back along the dead-reckoned path (the camera cannot
+//    have left their gate and come back: their view is the current map's); and (spatial
+//    gate, the known
 //    implementation of the paper's loop closing looked within 3 m of the estimate) keyframes
 //    whose dead-reckoned position is farther from the current one than
 //      gate_radius_m + gate_fraction * (dead-reckoned path length between the two keyframes),
@@ -231,6 +234,8 @@ class PlaceRecognition {
       const KeyframeEntry& query,
       const DetectedImage& detection, const std::vector<std::optional<StereoPoint>>& stereo,
       const std::vector<LandmarkId>& landmark, bool gate);
+  // A stereo camera that went at least two gate radii along its path since `old`.
+  bool LeftAndCameBack(const KeyframeEntry& old, const KeyframeEntry& query) const;
   // |t_w - query.T_w_c.translation()| within the gate radius of (old, query).
   bool WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
                   const Eigen::Vector3d& t_w) const;
