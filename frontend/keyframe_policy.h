@@ -15,8 +15,9 @@ namespace dala {
 //    exceeds `max_parallax_px` (enough baseline for the monocular estimators);
 //  - a stereo camera travelled more than `max_distance_baselines` stereo baselines (the
 //    temporal baseline to the keyframe against the rig's own: a distance in the rig's unit, not
-//    in metres, so it scales with the rig; 2.5 = 1 m on the rendered 0.4 m rig, 1.34 m on
-//    KITTI's 0.54 m one; docs/backend.md, "Keyframes"), or more than `max_distance_m` metres
+//    in metres, so it scales with the rig; 0.5 = 0.2 m on the rendered 0.4 m rig, 0.27 m on
+//    KITTI's 0.54 m one, where a car at 10 Hz makes a keyframe of every frame; docs/backend.md,
+//    "Keyframes"), or more than `max_distance_m` metres
 //    (an optional cap, off by default), or turned more than `max_rotation_rad`;
 //  - `max_frames` frames passed (bounded gap for the backend) AND the view has changed at
 //    all: a median parallax of at least `min_parallax_px` or a rotation of at least a tenth of
@@ -27,7 +28,7 @@ namespace dala {
 struct KeyframePolicyOptions {
   double min_tracked_fraction = 0.6;
   double max_parallax_px = 30.0;
-  double max_distance_baselines = 2.5;  // stereo only; 0: off.
+  double max_distance_baselines = 0.5;  // stereo only; 0: off.
   double max_distance_m = 0.0;  // 0: off.
   double max_rotation_rad = 0.17;  // ~10 degrees.
   int max_frames = 10;

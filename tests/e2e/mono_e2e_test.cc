@@ -25,7 +25,7 @@ namespace {
 constexpr double kRoverAtePercentBest = 0.0598;        // 0.0168 m over 28.0 m.
 constexpr double kBlackAtePercentBest = 0.0830;
 constexpr double kKittiAteMetresBest = 0.0308;
-constexpr double kStereoBlackAtePercentBest = 0.0294;  // Without relocalisation: 0.0517 %.
+constexpr double kStereoBlackAtePercentBest = 0.0378;  // Median of draws 0-2; without reloc. 0.0541 %.
 constexpr double kJerkSeed4AteMetresBest = 0.1725;  // fast 200 seed 4 (jerks).
 constexpr double kJerkSeed7AteMetresBest = 0.0343;  // fast 200 seed 7 (a jerk at frame 90).
 constexpr double kGapBridgedAteMetresBest = 0.0828;  // fast 200 seed 2, frames 60-67 dropped.
@@ -415,23 +415,32 @@ namespace {
 // The same three black frames with the stereo BA: the frames after them find the last tracked
 // keyframe's landmarks again (relocalisation without a prior, then PnP) and tracking resumes in
 // the same map. Without the relocalisation (no local map handed to the frontend) the frames
-// after the gap start new landmarks at the extrapolated pose.
+// after the gap start new landmarks at the extrapolated pose. The ATE is the median over three
+// RANSAC draws (ransac_order_seed 0, 1, 2): after the gap one draw moves it by up to 2x (eight
+// draws: 0.0052-0.0096 m, docs/results.md), more than a change the bound is meant to catch.
 TEST(RelocalisationE2e, StereoTrackingResumesInTheSameMapAfterBlackFrames) {
   const sim::SyntheticSequence seq(Preset("rover_loop", 100));
   SystemOptions stereo;
-  const MonoRun with = RunRendered(seq, stereo, {50, 51, 52}, AlignmentType::kSE3);
+  std::vector<double> fractions;
+  for (uint64_t draw = 0; draw < 3; ++draw) {
+    stereo.ransac_order_seed = draw;
+    const MonoRun with = RunRendered(seq, stereo, {50, 51, 52}, AlignmentType::kSE3);
+    ASSERT_TRUE(with.eval.ok) << with.eval.error;
+    EXPECT_EQ(with.lost_after, 3) << "draw " << draw;  // The black frames only.
+    fractions.push_back(with.eval.ate.translation.rmse / seq.PathLength());
+  }
+  std::sort(fractions.begin(), fractions.end());
+  const double median = fractions[1];
+  stereo.ransac_order_seed = 0;
   stereo.frontend.local_map.enable = false;
   const MonoRun without = RunRendered(seq, stereo, {50, 51, 52}, AlignmentType::kSE3);
-  ASSERT_TRUE(with.eval.ok) << with.eval.error;
   ASSERT_TRUE(without.eval.ok) << without.eval.error;
-  const double fraction = with.eval.ate.translation.rmse / seq.PathLength();
-  std::cout << "[ measured ] ba/stereo rover 100 frames with 3 black ones: lost " << with.lost_after
-            << ", SE(3) ATE " << 100 * fraction << " % of the path (without relocalisation: lost "
-            << without.lost_after << ", "
+  std::cout << "[ measured ] ba/stereo rover 100 frames with 3 black ones: SE(3) ATE over draws 0-2 "
+            << 100 * fractions[0] << " " << 100 * fractions[1] << " " << 100 * fractions[2]
+            << " % of the path (without relocalisation, draw 0: lost " << without.lost_after << ", "
             << 100 * without.eval.ate.translation.rmse / seq.PathLength() << " %)" << std::endl;
-  EXPECT_EQ(with.lost_after, 3);  // The black frames only (without relocalisation: 4).
-  testing::ExpectWithinBound("ba/stereo ATE / path, rover 100 with 3 black frames",
-                             100 * fraction, kStereoBlackAtePercentBest, "%");
+  testing::ExpectWithinBound("ba/stereo ATE / path, rover 100 with 3 black frames, median of 3 draws",
+                             100 * median, kStereoBlackAtePercentBest, "%");
 }
 
 // Lost for 70 frames (black) while the camera drives on around the small loop, and the images

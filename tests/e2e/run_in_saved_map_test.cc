@@ -78,7 +78,7 @@ RunB RunInMap(const sim::SyntheticSequence& seq, const SystemOptions& options, c
 
 // Bounds: 1.5x the best values recorded (runs are bit-identical). Without the map B would start
 // at the identity, 15 m and more from where A's frame puts frame 60.
-constexpr double kStereoMapErrorMetresBest = 0.0123;  // 0.5 m aside, 3 deg.
+constexpr double kStereoMapErrorMetresBest = 0.00779;  // 0.5 m aside, 3 deg.
 constexpr double kMonoMapOffsetMetresBest = 0.0217;
 
 TEST(RunInSavedMap, StereoRunContinuesInTheSavedMapsFrame) {

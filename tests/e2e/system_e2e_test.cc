@@ -74,7 +74,7 @@ TEST(SystemE2e, RoverStretchStereoBa) {
   const double fraction = run.eval.ate.translation.rmse / seq.PathLength();
   std::cout << "[ measured ] rover 150 frames, path " << seq.PathLength() << " m, ATE "
             << run.eval.ate.translation.rmse << " m (" << 100 * fraction << " %)" << std::endl;
-  testing::ExpectWithinBound("ba/stereo ATE / path, rover 150 frames", 100 * fraction, 0.0833,
+  testing::ExpectWithinBound("ba/stereo ATE / path, rover 150 frames", 100 * fraction, 0.0586,
                              "%");
 }
 
@@ -258,7 +258,7 @@ TEST(SystemE2e, RoverStretchEkfStereoAndMono) {
               << " m, ATE " << run.eval.ate.translation.rmse << " m (" << 100 * fraction
               << " %)" << std::endl;
     testing::ExpectWithinBound(std::string("ekf/") + mode + " ATE / path, rover 100 frames",
-                               100 * fraction, options.mode == "stereo" ? 0.0454 : 0.0341, "%");
+                               100 * fraction, options.mode == "stereo" ? 0.0422 : 0.0332, "%");
   }
 }
 

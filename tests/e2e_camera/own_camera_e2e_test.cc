@@ -1,12 +1,14 @@
 // End to end through a distorting lens: `dala synth --distortion / --fisheye` renderings read
-// through their calibration files (undistorted, or rectified at open) give an ATE within 1.2x
-// of the same sequence rendered without a lens; and the calibration files written in every
-// format read back to the same camera.
+// through their calibration files (undistorted, or rectified at open) give a mean ATE over
+// three scenes within 1.5x of the same scenes rendered without a lens; and the calibration
+// files written in every format read back to the same camera.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "backend/system.h"
 #include "core/eval/evaluate.h"
@@ -30,32 +32,43 @@ double RunAte(const std::string& folder, const DatasetOptions& dataset_options =
   return eval.ate.translation.rmse;
 }
 
-sim::SimOptions Rendering(const std::string& lens) {
+sim::SimOptions Rendering(const std::string& lens, uint64_t seed = 5) {
   sim::SimOptions sim;
   sim.preset = "rover_loop";
   sim.frames = 40;
-  sim.seed = 5;
+  sim.seed = seed;
   sim.lens = lens;
   return sim;
 }
 
-TEST(OwnCameraE2e, DistortedRenderingsWithinOnePointTwoTimesTheUndistortedAte) {
+// One rendering is one draw: through a lens the detector sees other pixels, and over ten scenes
+// (seeds 1-10) the radtan / pinhole ATE ratio of a single scene spans 0.7-2.0 while the means
+// differ by 4 % (docs/results.md). So the mean over three scenes is compared, with 1.5x: a lens
+// read as a pinhole (the distortion ignored) gives ~10x (0.05-0.08 m against 0.005 m).
+TEST(OwnCameraE2e, DistortedRenderingsWithinOnePointFiveTimesTheUndistortedAte) {
   testing::TempDir dir;
-  sim::WriteSyntheticDataset(Rendering("pinhole"), dir / "pinhole", false);
-  const double ate_pinhole = RunAte(dir / "pinhole");
+  const std::vector<uint64_t> scenes = {5, 6, 7};
+  std::map<std::string, double> mean_ate;
+  for (const std::string lens : {"pinhole", "radtan", "fisheye"}) {
+    for (const uint64_t seed : scenes) {
+      const std::string folder = dir / (lens + std::to_string(seed));
+      sim::WriteSyntheticDataset(Rendering(lens, seed), folder, false);
+      // Read by default through calibration/kalibr.yaml; the OpenCV file gives the same rig.
+      mean_ate[lens] += RunAte(folder) / scenes.size();
+      if (lens == "pinhole" || seed != scenes.front()) continue;
+      DatasetOptions opencv;
+      opencv.calibration_yaml = folder + "/calibration/opencv.yml";
+      const auto by_opencv = OpenDataset(folder, opencv);
+      const auto by_kalibr = OpenDataset(folder);
+      EXPECT_NEAR(by_opencv->rig().left.fx, by_kalibr->rig().left.fx, 1e-6);
+      EXPECT_NEAR(by_opencv->rig().baseline, by_kalibr->rig().baseline, 1e-9);
+    }
+  }
   for (const std::string lens : {"radtan", "fisheye"}) {
-    sim::WriteSyntheticDataset(Rendering(lens), dir / lens, false);
-    // Read by default through calibration/kalibr.yaml; the OpenCV file gives the same rig.
-    const double ate = RunAte(dir / lens);
-    DatasetOptions opencv;
-    opencv.calibration_yaml = dir / (lens + "/calibration/opencv.yml");
-    const auto by_opencv = OpenDataset(dir / lens, opencv);
-    const auto by_kalibr = OpenDataset(dir / lens);
-    EXPECT_NEAR(by_opencv->rig().left.fx, by_kalibr->rig().left.fx, 1e-6);
-    EXPECT_NEAR(by_opencv->rig().baseline, by_kalibr->rig().baseline, 1e-9);
-    std::cout << "[ measured ] stereo BA, rover_loop 40 frames: ATE " << lens << " " << ate
-              << " m, pinhole " << ate_pinhole << " m, ratio " << ate / ate_pinhole << std::endl;
-    EXPECT_LT(ate, 1.2 * ate_pinhole) << lens;
+    std::cout << "[ measured ] stereo BA, rover_loop 40 frames, mean over seeds 5-7: ATE " << lens
+              << " " << mean_ate[lens] << " m, pinhole " << mean_ate["pinhole"] << " m, ratio "
+              << mean_ate[lens] / mean_ate["pinhole"] << std::endl;
+    EXPECT_LT(mean_ate[lens], 1.5 * mean_ate["pinhole"]) << lens;
   }
 }
 

@@ -27,9 +27,9 @@ TEST(KeyframePolicy, EachCriterionNamesItself) {
   e.median_parallax_px = 31;
   ASSERT_TRUE(policy.IsKeyframe(e, &reason));
   EXPECT_EQ(std::string(reason), "parallax");
-  // Distance in stereo baselines (2.5 by default): 1.2 m is past 2.5 x 0.4 m, not 2.5 x 0.54 m.
+  // Distance in stereo baselines (0.5 by default): 0.25 m is past 0.5 x 0.4 m, not 0.5 x 0.54 m.
   e = Still(2);
-  e.T_kf_cur.translation().z() = 1.2;
+  e.T_kf_cur.translation().z() = 0.25;
   e.stereo_baseline_m = 0.4;
   ASSERT_TRUE(policy.IsKeyframe(e, &reason));
   EXPECT_EQ(std::string(reason), "distance");
