@@ -125,6 +125,7 @@ void VisitFrontend(FrontendOptions* f, OptionVisitor* v) {
   v->Field("keyframe", "min_tracked_fraction", &k.min_tracked_fraction);
   v->Field("keyframe", "max_parallax_px", &k.max_parallax_px);
   v->Field("keyframe", "max_distance_baselines", &k.max_distance_baselines);
+  v->Field("keyframe", "revisit_distance_baselines", &k.revisit_distance_baselines);
   v->Field("keyframe", "max_rotation_rad", &k.max_rotation_rad);
   v->Field("keyframe", "max_frames", &k.max_frames);
   v->BeginExperimental();

@@ -596,6 +596,7 @@ bool Frontend::DecideKeyframe(const TrackedFrame& cur, bool stereo, bool guided,
   // One camera: the dead-reckoned translation has no unit, so no criterion on distance.
   if (!stereo) evidence.T_kf_cur.translation().setZero();
   evidence.stereo_baseline_m = stereo ? rig_.baseline : 0.0;
+  evidence.revisiting = keyframe_place_held_;
   out->tracked_fraction = evidence.tracked_fraction;
   return keyframe_policy_.IsKeyframe(evidence);
 }
@@ -682,6 +683,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   relocalised_prev_ = relocalised_prev_ || relocalised;
   if (out.is_keyframe) {
     keyframe_ = cur;
+    keyframe_place_held_ = out.place_held_by.has_value();
     frames_since_keyframe_ = 0;
   }
   prev_ = std::move(cur);

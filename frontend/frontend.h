@@ -204,6 +204,7 @@ class Frontend {
   double path_length_m_ = 0.0;  // Dead-reckoned distance travelled.
   int64_t next_landmark_ = 0;
   int frames_since_keyframe_ = 0;
+  bool keyframe_place_held_ = false;  // The last keyframe's place is held by an older one.
   // A frame was relocalised from the database: once the estimator has placed a frame, the
   // stereo dead reckoning continues from the estimator's pose instead of the extrapolation of
   // the gap.

@@ -16,6 +16,9 @@ bool KeyframePolicyOptions::IsValid(std::string* why) const {
   if (!(max_distance_baselines >= 0)) {
     return fail("keyframe.max_distance_baselines must be >= 0 (0: off)");
   }
+  if (!(revisit_distance_baselines >= 0)) {
+    return fail("keyframe.revisit_distance_baselines must be >= 0 (0: max_distance_baselines)");
+  }
   if (max_rotation_rad <= 0) return fail("keyframe.max_rotation_rad must be > 0");
   if (!(min_parallax_px >= 0)) return fail("keyframe.min_parallax_px must be >= 0");
   if (min_frames < 1 || max_frames < min_frames)
@@ -37,8 +40,10 @@ bool KeyframePolicy::IsKeyframe(const KeyframeEvidence& e, const char** reason) 
   if (e.tracked_fraction < options_.min_tracked_fraction) return yes("tracked fraction");
   if (e.median_parallax_px > options_.max_parallax_px) return yes("parallax");
   const double distance = e.T_kf_cur.translation().norm();
-  if (options_.max_distance_baselines > 0 && e.stereo_baseline_m > 0 &&
-      distance > options_.max_distance_baselines * e.stereo_baseline_m) {
+  const double baselines = e.revisiting && options_.revisit_distance_baselines > 0
+                               ? options_.revisit_distance_baselines
+                               : options_.max_distance_baselines;
+  if (baselines > 0 && e.stereo_baseline_m > 0 && distance > baselines * e.stereo_baseline_m) {
     return yes("distance");
   }
   if (options_.max_distance_m > 0 && distance > options_.max_distance_m) return yes("distance");

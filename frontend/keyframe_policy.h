@@ -17,7 +17,9 @@ namespace dala {
 //    temporal baseline to the keyframe against the rig's own: a distance in the rig's unit, not
 //    in metres, so it scales with the rig; 0.5 = 0.2 m on the rendered 0.4 m rig, 0.27 m on
 //    KITTI's 0.54 m one, where a car at 10 Hz makes a keyframe of every frame; docs/backend.md,
-//    "Keyframes"), or more than `max_distance_m` metres
+//    "Keyframes"; `revisit_distance_baselines`, 2.5, while the last keyframe's place is held by
+//    an older keyframe: a revisit, whose keyframes the map culls into the older ones), or more
+//    than `max_distance_m` metres
 //    (an optional cap, off by default), or turned more than `max_rotation_rad`;
 //  - `max_frames` frames passed (bounded gap for the backend) AND the view has changed at
 //    all: a median parallax of at least `min_parallax_px` or a rotation of at least a tenth of
@@ -29,6 +31,9 @@ struct KeyframePolicyOptions {
   double min_tracked_fraction = 0.6;
   double max_parallax_px = 30.0;
   double max_distance_baselines = 0.5;  // stereo only; 0: off.
+  // The same while revisiting (the last keyframe's place is held by an older keyframe, which
+  // the map keeps instead of it): 0 = max_distance_baselines.
+  double revisit_distance_baselines = 2.5;
   double max_distance_m = 0.0;  // 0: off.
   double max_rotation_rad = 0.17;  // ~10 degrees.
   int max_frames = 10;
@@ -44,6 +49,7 @@ struct KeyframeEvidence {
   double median_parallax_px = 0.0;
   Pose T_kf_cur = Pose::Identity();  // Current camera in the keyframe's camera (estimated).
   double stereo_baseline_m = 0.0;    // The rig's baseline; 0: one camera (no distance unit).
+  bool revisiting = false;  // The last keyframe's place is held by an older keyframe.
 };
 
 class KeyframePolicy {

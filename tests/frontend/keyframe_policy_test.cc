@@ -35,6 +35,14 @@ TEST(KeyframePolicy, EachCriterionNamesItself) {
   EXPECT_EQ(std::string(reason), "distance");
   e.stereo_baseline_m = 0.54;
   EXPECT_FALSE(policy.IsKeyframe(e));
+  // Revisiting a held place: 2.5 baselines (1 m on the 0.4 m rig).
+  e.stereo_baseline_m = 0.4;
+  e.revisiting = true;
+  EXPECT_FALSE(policy.IsKeyframe(e));
+  e.T_kf_cur.translation().z() = 1.2;
+  ASSERT_TRUE(policy.IsKeyframe(e, &reason));
+  EXPECT_EQ(std::string(reason), "distance");
+  e.revisiting = false;
   e.stereo_baseline_m = 0.0;  // One camera: no distance unit, no distance criterion.
   e.T_kf_cur.translation().z() = 100;
   EXPECT_FALSE(policy.IsKeyframe(e));
@@ -87,6 +95,10 @@ TEST(KeyframePolicy, InvalidOptionsAreRejected) {
   o.max_distance_m = -1;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("max_distance_m"), std::string::npos);
+  o = KeyframePolicyOptions();
+  o.revisit_distance_baselines = -1;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("revisit_distance_baselines"), std::string::npos);
   o = KeyframePolicyOptions();
   o.max_distance_baselines = -1;
   EXPECT_FALSE(o.IsValid(&why));
