@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/io/trajectory_io.h"
 #include "core/sim/dataset_writer.h"
 #include "core/sim/synthetic_sequence.h"
 #include "core/sim/world.h"
@@ -45,9 +46,37 @@ DEFINE_string(distortion, "",
 DEFINE_string(fisheye, "",
               "render through a fisheye (equidistant, Kannala-Brandt) lens: 'equidistant' "
               "(k 0.02 -0.01 0.005 -0.001) or its coefficients 'k1,k2,k3,k4'");
+DEFINE_string(path, "",
+              "drive this recorded camera path instead of the preset's (a ground-truth "
+              "trajectory: KITTI poses.txt, TUM or EuRoC csv), along streets lined with "
+              "buildings; a KITTI file has one pose per frame at --fps");
+DEFINE_string(path_format, "auto", "format of --path: auto, kitti, tum, euroc");
+DEFINE_int32(path_first, 0, "index of the first pose of --path to drive (a clip from there)");
+DEFINE_double(path_camera_height, 1.65,
+              "camera height above the street along --path, metres (KITTI's car: 1.65)");
 
 namespace dala {
 namespace {
+
+// The recorded path of --path from pose --path_first on, times from that pose (a KITTI file:
+// one pose per frame at `fps`).
+std::vector<StampedPose> RecordedPathFlag(double fps) {
+  const Trajectory trajectory =
+      ReadTrajectory(FLAGS_path, ParseTrajectoryFormat(FLAGS_path_format));
+  if (FLAGS_path_first < 0 || FLAGS_path_first + 2 > static_cast<int>(trajectory.size())) {
+    throw Error() << "--path_first " << FLAGS_path_first << ": " << FLAGS_path << " has "
+                  << trajectory.size() << " poses, and a path needs 2 from the first";
+  }
+  std::vector<StampedPose> path;
+  for (size_t i = static_cast<size_t>(FLAGS_path_first); i < trajectory.size(); ++i) {
+    StampedPose p = trajectory.poses[i];
+    const size_t k = i - static_cast<size_t>(FLAGS_path_first);
+    p.t_ns = trajectory.has_timestamps ? p.t_ns - trajectory.poses[FLAGS_path_first].t_ns
+                                       : NsFromSeconds(static_cast<double>(k) / fps);
+    path.push_back(p);
+  }
+  return path;
+}
 
 // "radtan" / "equidistant" (the defaults) or a comma-separated list of numbers.
 std::vector<double> LensCoefficientsFlag(const std::string& flag, const std::string& value,
@@ -90,6 +119,11 @@ int RunSynth(const std::vector<std::string>& args) {
   options.baseline = FLAGS_baseline;
   options.texel_density_scale = FLAGS_texel_density;
   options.right_cx_error_px = FLAGS_right_cx_error_px;
+  if (!FLAGS_path.empty()) {
+    options.preset = "path";
+    options.path = RecordedPathFlag(options.fps);
+    options.path_camera_height = FLAGS_path_camera_height;
+  }
   if (!FLAGS_distortion.empty() && !FLAGS_fisheye.empty()) {
     throw Error() << "--distortion and --fisheye are two lenses: give one";
   }
@@ -111,9 +145,10 @@ int RunSynth(const std::vector<std::string>& args) {
   outputs.progress = [](size_t done, size_t total) {
     std::cerr << "dala synth: " << done << "/" << total << " frames\n";
   };
-  std::cerr << "dala synth: preset " << options.preset << ", seed " << options.seed << ", "
-            << (options.stereo ? "stereo" : "mono") << " " << options.width << "x" << options.height
-            << " -> " << FLAGS_out << "\n";
+  std::cerr << "dala synth: "
+            << (options.path.empty() ? "preset " + options.preset : "path " + FLAGS_path)
+            << ", seed " << options.seed << ", " << (options.stereo ? "stereo" : "mono") << " "
+            << options.width << "x" << options.height << " -> " << FLAGS_out << "\n";
   sim::WriteSyntheticDataset(options, FLAGS_out, outputs);
   std::cerr << "dala synth: done\n";
   return 0;
@@ -123,7 +158,7 @@ std::string Usage() {
   std::ostringstream os;
   os << "dala synth --out DIR [--preset NAME] [--frames N] [--seed S] [--mono] [--points] "
         "[--odometry] [--width W --height H] [--noise SIGMA] [--blur] [--brightness A] [--fps HZ]\n"
-        "           [--texel_density K]\n"
+        "           [--texel_density K] [--path FILE [--path_first I] [--path_camera_height H]]\n"
         "           [--distortion radtan|K1,K2,P1,P2[,K3] | --fisheye equidistant|K1,K2,K3,K4] "
         "...\n\n"
         "Renders a synthetic sequence of a procedural textured world with exact ground truth\n"
@@ -133,6 +168,8 @@ std::string Usage() {
         "Kalibr, ROS camera_info, dala's own). With --distortion or --fisheye the images are\n"
         "rendered through that lens; `dala run` then undistorts them with "
         "calibration/kalibr.yaml.\n"
+        "With --path the camera drives a recorded trajectory (e.g. a KITTI drive's poses.txt)\n"
+        "through streets lined with buildings along it instead of a preset's path.\n"
         "World frame: x east, y north, z up. See docs/synthetic.md.\n\npresets:\n";
   for (const auto& p : sim::Presets()) {
     os << "  " << p.name << std::string(p.name.size() < 12 ? 12 - p.name.size() : 1, ' ')

@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/sim/random.h"
+#include "core/sim/recorded_path.h"
 
 namespace dala::sim {
 namespace {
@@ -26,7 +27,7 @@ double Gaussian(SimRng& rng) {
 
 bool SimOptions::IsValid(std::string* why) const {
   std::ostringstream os;
-  if (FindPreset(preset) == nullptr) {
+  if (path.empty() && FindPreset(preset) == nullptr) {
     os << "unknown preset '" << preset << "'; use one of:";
     for (const auto& p : Presets()) os << " " << p.name;
   } else if (frames < 0) {
@@ -90,10 +91,17 @@ std::vector<std::string> PresetNames() {
 SyntheticSequence::SyntheticSequence(const SimOptions& options) : options_(options) {
   std::string why;
   if (!options_.IsValid(&why)) throw Error() << "synthetic sequence options: " << why;
-  const PresetInfo* info = FindPreset(options_.preset);
-  frames_ = options_.frames > 0
-                ? options_.frames
-                : std::max(1, static_cast<int>(std::lround(info->duration_s * options_.fps)));
+  // A recorded path is placed first: it throws on a path that cannot be driven on a street.
+  std::vector<StampedPose> placed_path;
+  if (!options_.path.empty()) {
+    placed_path = PlaceOnStreet(options_.path, options_.path_camera_height);
+  }
+  const double duration_s = placed_path.empty() ? FindPreset(options_.preset)->duration_s
+                                                : SecondsFromNs(placed_path.back().t_ns);
+  const int default_frames =
+      placed_path.empty() ? std::max(1, static_cast<int>(std::lround(duration_s * options_.fps)))
+                          : static_cast<int>(std::floor(duration_s * options_.fps + 1e-6)) + 1;
+  frames_ = options_.frames > 0 ? options_.frames : default_frames;
   camera_.width = options_.width;
   camera_.height = options_.height;
   camera_.fx = options_.fx;
@@ -102,8 +110,11 @@ SyntheticSequence::SyntheticSequence(const SimOptions& options) : options_(optio
   camera_.cy = options_.cy_or_centre();
   canvas_ = camera_;
   BuildLens();
-  world_ = BuildWorld(options_.preset, options_.seed, options_.texture_size,
-                      options_.texel_density_scale);
+  world_ = placed_path.empty()
+               ? BuildWorld(options_.preset, options_.seed, options_.texture_size,
+                            options_.texel_density_scale)
+               : BuildWorldAlongPath(placed_path, options_.seed, options_.texture_size,
+                                     options_.texel_density_scale);
   for (int i = 0; i < frames_; ++i) ground_truth_.Add(t_ns(i), T_w_c0(i));
 }
 

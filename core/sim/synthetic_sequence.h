@@ -33,7 +33,14 @@ struct SimOptions {
   // One of PresetNames(): rover_loop, flight, rotation, fast, low_texture, small_loop,
   // false_loop.
   std::string preset = "rover_loop";
-  // Number of frames; 0 = the preset's default duration times fps.
+  // A recorded camera path to drive instead of the preset's (dala synth --path; core/sim/
+  // recorded_path.h): T_w_c of the left camera at increasing times in any world frame, placed
+  // on a street lined with buildings, camera path_camera_height (m) above the ground (median).
+  // The ground truth is then in the street world's frame. Empty: the preset's world and path.
+  std::vector<StampedPose> path;
+  double path_camera_height = 1.65;
+  // Number of frames; 0 = the preset's default duration times fps (with a path: every frame
+  // time within the recording).
   int frames = 0;
   // Seed of everything random: scene layout, textures, image noise, odometry noise.
   uint64_t seed = 1;

@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "core/sim/random.h"
+#include "core/sim/recorded_path.h"
 
 namespace dala::sim {
 namespace {
@@ -278,11 +279,20 @@ double DistanceToFootprint(const Eigen::Vector2d& q, const Eigen::Vector2d& c, d
          std::min(std::max(lx, ly), 0.0);
 }
 
+// A box's footprint on the ground: centre, yaw, half length and half depth.
+struct Footprint {
+  Eigen::Vector2d c;
+  double yaw, hl, hd;
+};
+
 // Lines both sides of a street (a polyline of path samples) with buildings and crates, starting
 // at arc length s0 until s1. Buildings closer than the street half width to any of
-// `clearance_samples` are dropped.
+// `clearance_samples` are dropped. `placed` (optional): boxes already standing; a new box that
+// would overlap one of them is dropped, and the boxes placed are added (a path that drives a
+// street twice lines it once).
 void LineStreet(SimRng& rng, SceneBuilder& builder, const std::vector<Eigen::Vector2d>& street,
-                const std::vector<Eigen::Vector2d>& clearance_samples, double ground_z) {
+                const std::vector<Eigen::Vector2d>& clearance_samples, double ground_z,
+                std::vector<Footprint>* placed = nullptr) {
   std::vector<double> arc(street.size(), 0.0);
   for (size_t i = 1; i < street.size(); ++i)
     arc[i] = arc[i - 1] + (street[i] - street[i - 1]).norm();
@@ -297,6 +307,13 @@ void LineStreet(SimRng& rng, SceneBuilder& builder, const std::vector<Eigen::Vec
     for (const Eigen::Vector2d& q : clearance_samples) {
       if (DistanceToFootprint(q, c, yaw, hl, hd) < margin) return false;
     }
+    if (placed == nullptr) return true;
+    // The new box as the disc around its footprint against each standing footprint.
+    const double radius = std::hypot(hl, hd);
+    for (const Footprint& f : *placed) {
+      if (DistanceToFootprint(c, f.c, f.yaw, f.hl, f.hd) < radius) return false;
+    }
+    placed->push_back({c, yaw, hl, hd});
     return true;
   };
   for (int side : {1, -1}) {
@@ -439,7 +456,48 @@ void BuildTerrain(Scene* scene, uint64_t seed, double texel_density_scale) {
   scene->haze_distance = 400.0;
 }
 
+// The street world along a recorded path (already placed on the street, RecordedPath): both
+// sides of its ground track lined with buildings (a street driven twice is lined once), the
+// ground under its bounding box and 60 m around, a skyline ring beyond.
+void BuildStreetsAlongPath(Scene* scene, const std::vector<StampedPose>& path, uint64_t seed,
+                           double texel_density_scale) {
+  // The ground track, a sample every 0.5 m at least (a car standing still adds none).
+  std::vector<Eigen::Vector2d> track;
+  for (const StampedPose& p : path) {
+    const Eigen::Vector2d xy = p.T_w_c.translation().head<2>();
+    if (track.empty() || (xy - track.back()).norm() >= 0.5) track.push_back(xy);
+  }
+  if (track.size() < 2) track.push_back(track.back() + Eigen::Vector2d(0.5, 0.0));
+  Eigen::Vector2d lo = track[0], hi = track[0];
+  for (const Eigen::Vector2d& q : track) {
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  SceneBuilder builder(scene, 60.0 * texel_density_scale);
+  SimRng rng(MixSeed(seed, 30));
+  std::vector<Footprint> placed;
+  LineStreet(rng, builder, track, track, 0.0, &placed);
+  const Eigen::Vector2d centre = (lo + hi) / 2;
+  const double r0 = (hi - lo).norm() / 2 + 60.0;
+  AddSkyline(rng, builder, centre, r0, r0 + 50.0,
+             std::max(36, static_cast<int>(2 * M_PI * r0 / 40.0)));
+  SceneBuilder(scene, 80.0 * texel_density_scale)
+      .AddGround(lo.x() - 60, hi.x() + 60, lo.y() - 60, hi.y() + 60, 10.0, [&](int ix, int iy) {
+        return SimRng(MixSeed(seed, 1000000 + static_cast<uint64_t>(ix + 100000),
+                              static_cast<uint64_t>(iy + 100000)));
+      });
+}
+
 }  // namespace
+
+World BuildWorldAlongPath(const std::vector<StampedPose>& placed_path, uint64_t seed,
+                          int texture_size, double texel_density_scale) {
+  World world;
+  BuildStreetsAlongPath(&world.scene, placed_path, seed, texel_density_scale);
+  world.path = std::make_unique<RecordedPath>(placed_path);
+  AddTextures(&world.scene, seed, TextureStyle::kRich, texture_size);
+  return world;
+}
 
 const std::vector<PresetInfo>& Presets() {
   static const std::vector<PresetInfo> presets = {

@@ -12,6 +12,7 @@
 
 #include "core/geometry.h"
 #include "core/sim/scene.h"
+#include "core/trajectory.h"
 
 namespace dala::sim {
 
@@ -44,6 +45,12 @@ struct World {
 // FindPreset first).
 World BuildWorld(const std::string& preset, uint64_t seed, int texture_size = 1024,
                  double texel_density_scale = 1.0);
+
+// The street world along a recorded path already placed on the street (PlaceOnStreet,
+// core/sim/recorded_path.h): buildings line both sides of the path's ground track, as in the
+// rover_loop city; the camera follows the path (RecordedPath, times from 0).
+World BuildWorldAlongPath(const std::vector<StampedPose>& placed_path, uint64_t seed,
+                          int texture_size = 1024, double texel_density_scale = 1.0);
 
 }  // namespace dala::sim
 
