@@ -1,4 +1,4 @@
-"""Reads the files of one run per line that the results scripts take: "KEY SEED ATE" (KEY a
+"""Reads the files of one run per line that the results scripts take: "KEY SEED ATE ..." (KEY a
 start frame or a sequence name, SEED the run's ransac_order_seed, ATE its ATE RMSE in metres)."""
 
 
@@ -8,6 +8,6 @@ def read_runs(path, key_type):
     with open(path) as f:
         for line in f:
             if line.strip():
-                key, seed, ate = line.split()
+                key, seed, ate = line.split()[:3]
                 runs[(key_type(key), int(seed))] = float(ate)
     return runs
