@@ -407,6 +407,9 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
        << "from frame " << init->reference.frame << " (" << init->p_ref.size() << " points, "
        << init->ModelName() << ", median parallax " << init->two_view.median_parallax_deg
        << " deg)";
+  if (placed_before_reference_ > 0) {
+    note << "; " << placed_before_reference_ << " earlier frames placed in it";
+  }
   out.note = note.str();
   VLOG(1) << "frame " << m.frame << ": " << out.note;
   return out;
@@ -456,6 +459,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
   frames_[reference_index] = {init.reference.t_ns, reference, Pose::Identity(), true};
   SolveWindow(current);
 
+  placed_before_reference_ = PlaceEarlierFrames(init, reference_index, reference, current);
   // The frames between the two views, localised in the new map (their guess: interpolated).
   const double span = static_cast<double>(init.current.t_ns - init.reference.t_ns);
   std::optional<Pose> T_w_last;
@@ -482,6 +486,34 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
                        : InterpolatePose(Pose::Identity(), T_w_prev_,
                                          1.0 / static_cast<double>(init.between.size() + 1));
   RememberLastKeyframe(current, init.current);
+}
+
+int SlidingWindowEstimator::PlaceEarlierFrames(const MonoInitialization& init,
+                                               size_t reference_index, KeyframeId reference,
+                                               KeyframeId current) {
+  // Only the first map: after a loss, the frames before the new reference stay lost.
+  if (reinit_) return 0;
+  // Back from the reference, each guessed by the pair's motion at its time (constant velocity),
+  // tracked against the new map; the first that fails ends it (the earlier ones share fewer
+  // of the new map's landmarks).
+  const Pose& T_w_ref = keyframe_poses_.at(reference);
+  const double span = static_cast<double>(init.current.t_ns - init.reference.t_ns);
+  std::vector<std::pair<size_t, const FrameMeasurement*>> placed;  // Latest first.
+  size_t index = reference_index;
+  for (auto f = init.earlier.rbegin(); f != init.earlier.rend(); ++f) {
+    while (index > 0 && frames_[index].t_ns != f->t_ns) --index;
+    if (frames_[index].t_ns != f->t_ns || frames_[index].has_pose) break;
+    const double s = span > 0 ? (f->t_ns - init.reference.t_ns) / span : 0.0;
+    const Pose guess = InterpolatePose(T_w_ref, keyframe_poses_.at(current), s);
+    const PoseOnlyResult r = ba_.TrackFrame(WindowObservations(*f), guess, options_.pose_only);
+    if (r.status != PoseOnlyStatus::kOk) break;
+    frames_[index] = {f->t_ns, reference, T_w_ref.inverse() * r.T_w_c, true};
+    placed.emplace_back(index, &*f);
+  }
+  // Their later refinement in time order, before the frames between the pair.
+  for (auto it = placed.rbegin(); it != placed.rend(); ++it)
+    DeferFrameRefinement(it->first, *it->second);
+  return static_cast<int>(placed.size());
 }
 
 void SlidingWindowEstimator::RememberLastKeyframe(KeyframeId id, const FrameMeasurement& m) {
@@ -930,7 +962,7 @@ void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
         if (it == map_points_.end()) return std::nullopt;
         return it->second;
       },
-      T_w_kf * f.T_kf_c, options_.pose_only);
+      T_w_kf* f.T_kf_c, options_.pose_only);
   if (r.status == PoseOnlyStatus::kOk) f.T_kf_c = T_w_kf.inverse() * r.T_w_c;
 }
 

@@ -52,7 +52,18 @@ MonoInitializer::MonoInitializer(const PinholeCamera& camera, const MonoInitiali
 void MonoInitializer::Reset() {
   reference_.reset();
   between_.clear();
+  earlier_.clear();
   reason_.clear();
+}
+
+void MonoInitializer::GiveUp(size_t count) {
+  if (!reference_) return;
+  earlier_.push_back(std::move(*reference_));
+  reference_.reset();
+  for (size_t k = 0; k < count && k < between_.size(); ++k) {
+    earlier_.push_back(std::move(between_[k]));
+  }
+  while (earlier_.size() > kMaxEarlierFrames) earlier_.pop_front();
 }
 
 std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasurement& reference,
@@ -89,8 +100,8 @@ std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasuremen
 
 std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m) {
   const auto start_reference = [&](const std::string& why) {
+    GiveUp(between_.size());
     between_.clear();
-    reference_.reset();
     const int n = static_cast<int>(m.observations.size());
     std::ostringstream os;
     if (n >= options_.min_reference_features) {
@@ -103,6 +114,8 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
     return std::nullopt;
   };
   const auto initialised = [&](MonoInitialization init) {
+    init.earlier.assign(std::make_move_iterator(earlier_.begin()),
+                        std::make_move_iterator(earlier_.end()));
     Reset();
     reason_ = "initialised";
     return std::optional<MonoInitialization>(std::move(init));
@@ -129,6 +142,7 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
       if (init) {
         init->between.assign(std::make_move_iterator(between_.begin() + k + 1),
                              std::make_move_iterator(between_.end()));
+        GiveUp(k);  // The old reference and the frames before between_[k].
         return initialised(std::move(*init));
       }
       os << "; frame " << between_[k].frame << " as the reference: " << why_not;

@@ -18,7 +18,10 @@
 // frame's motion alone has too little parallax).
 //
 // On success: the reference frame (world frame = its camera), the frames in between (which the
-// estimator localises afterwards against the new map) and the current frame with
+// estimator localises afterwards against the new map), the frames before the reference since
+// the initialiser started (at most kMaxEarlierFrames, the latest; those of references given up:
+// the estimator localises them too where they share enough of the new map's landmarks) and the
+// current frame with
 // T_ref_cur (|t| = 1: the map's unit is this first baseline) and the triangulated landmarks
 // p_ref, refined by a two-view bundle adjustment, the essential matrix sampled twice
 // (backend/mono/refined_two_view.h).
@@ -37,6 +40,9 @@
 
 namespace dala {
 
+// The frames before the reference that an initialisation hands over (~20 KB each).
+inline constexpr size_t kMaxEarlierFrames = 30;
+
 struct MonoInitializerOptions {
   TwoViewOptions two_view;
   int min_reference_features = 100;
@@ -48,6 +54,8 @@ struct MonoInitializerOptions {
 
 struct MonoInitialization {
   FrameMeasurement reference;
+  // Frames given up with their references (oldest first), before `reference`.
+  std::vector<FrameMeasurement> earlier;
   std::vector<FrameMeasurement> between;  // After the reference, before the current frame.
   FrameMeasurement current;
   Pose T_ref_cur = Pose::Identity();            // |translation| = 1.
@@ -84,10 +92,15 @@ class MonoInitializer {
                                             const FrameMeasurement& m, const Correspondences& c,
                                             std::string* why_not) const;
 
+  // Keeps the frames of a reference given up (the reference and the first `count` frames after
+  // it) in earlier_, the latest kMaxEarlierFrames.
+  void GiveUp(size_t count);
+
   PinholeCamera camera_;
   MonoInitializerOptions options_;
   std::optional<FrameMeasurement> reference_;
   std::vector<FrameMeasurement> between_;
+  std::deque<FrameMeasurement> earlier_;
   std::string reason_;
 };
 

@@ -219,6 +219,36 @@ TEST(KittiMonoE2e, FastForwardMotionStartsWithinAFrame) {
                              worst_ate, 0.0556, "m");
 }
 
+// One camera from frame 4 at RANSAC draw 3: frame 4's tracks are gone before a pair with it
+// initialises, frame 8 becomes the reference and the map starts there. The frames before it are
+// placed in the map afterwards (MonoInitialization::earlier): every frame has a pose.
+TEST(KittiMonoE2e, AMapThatStartsLatePosesTheFramesBeforeIt) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+  const std::string out = ::testing::TempDir() + "/dala_kitti_mono_late_map";
+  std::filesystem::remove_all(out);
+  const testing::DalaCliResult r = testing::RunDala(
+      "run " + testing::SharedDataDir() +
+          "/kitti06_0000-0050 --mode mono --first_frame 4 --set ransac_order_seed=3 "
+          "--progress=false --out " +
+          out,
+      out);
+  ASSERT_EQ(r.status, 0) << r.log();
+  std::ifstream in(out + "/report.json");
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_FALSE(report.is_discarded()) << "no report.json in " << out;
+  std::string note;
+  for (const nlohmann::json& f : report["frames"]) {
+    const std::string n = f["note"].get<std::string>();
+    if (n.rfind("initialised", 0) == 0) note = n;
+  }
+  EXPECT_NE(note.find("from frame 8"), std::string::npos) << note;
+  EXPECT_NE(note.find("4 earlier frames placed"), std::string::npos) << note;
+  const nlohmann::json& s = report["summary"];
+  EXPECT_EQ(s["frames_with_pose"].get<int>(), s["frames"].get<int>());
+  // Within the bound of the worst start at the default draw (1.5 x 0.0435 m).
+  EXPECT_LT(s["ate"]["rmse"].get<double>(), 1.5 * 0.0435);
+}
+
 TEST(KittiStereoE2e, MonoEkfFromTheLeftImagesDoesNotCollapse) {
   DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
   const std::string out = ::testing::TempDir() + "/dala_kitti_ekf_mono";

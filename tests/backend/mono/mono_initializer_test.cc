@@ -1,6 +1,7 @@
 // MonoInitializer's choice of reference frame: when the reference's tracks are gone, the oldest
 // frame since then that shares a reference's worth of tracks with the current one is tried as
-// its reference, and kept if the pair initialises at once.
+// its reference, and kept if the pair initialises at once; the frames of the references given
+// up are handed over with the initialisation.
 
 #include "backend/mono/mono_initializer.h"
 
@@ -69,6 +70,33 @@ TEST(MonoInitializer, AFrameBetweenInitialisesWhenTheReferencesTracksAreGone) {
   EXPECT_TRUE(result->between.empty());
   EXPECT_EQ(result->current.frame, FrameId(2));
   EXPECT_GE(result->p_ref.size(), 100u);  // Of the 150 tracks from frame 1.
+  // The reference given up comes with it, for the estimator to place in the new map.
+  ASSERT_EQ(result->earlier.size(), 1u);
+  EXPECT_EQ(result->earlier[0].frame, FrameId(0));
+}
+
+TEST(MonoInitializer, FramesOfReferencesGivenUpAreHandedOverInTimeOrder) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), MonoInitializerOptions());
+  AddTheWeakPair(drive, &init);
+  // Frame 2 becomes the reference (frame 0's tracks are gone, frame 1 is too close to it);
+  // frame 3, 1.5 m on, initialises from it.
+  EXPECT_FALSE(init.Add(drive.Frame(2, 0.08, {{50, 80}, {200, 350}, {400, 600}})));
+  const std::optional<MonoInitialization> result =
+      init.Add(drive.Frame(3, 1.58, {{200, 350}, {400, 600}}));
+  ASSERT_TRUE(result) << init.reason();
+  EXPECT_EQ(result->reference.frame, FrameId(2));
+  ASSERT_EQ(result->earlier.size(), 2u);
+  EXPECT_EQ(result->earlier[0].frame, FrameId(0));
+  EXPECT_EQ(result->earlier[1].frame, FrameId(1));
+  // A new start after Reset hands over nothing from before it.
+  init.Reset();
+  AddTheWeakPair(drive, &init);
+  const std::optional<MonoInitialization> again =
+      init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 350}, {400, 600}}));
+  ASSERT_TRUE(again) << init.reason();
+  ASSERT_EQ(again->earlier.size(), 1u);
+  EXPECT_EQ(again->earlier[0].frame, FrameId(0));
 }
 
 TEST(MonoInitializer, TheCurrentFrameIsTheNewReferenceWhenNoFrameBetweenReachesIt) {
