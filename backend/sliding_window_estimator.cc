@@ -511,8 +511,9 @@ int SlidingWindowEstimator::PlaceEarlierFrames(const MonoInitialization& init,
     placed.emplace_back(index, &*f);
   }
   // Their later refinement in time order, before the frames between the pair.
-  for (auto it = placed.rbegin(); it != placed.rend(); ++it)
+  for (auto it = placed.rbegin(); it != placed.rend(); ++it) {
     DeferFrameRefinement(it->first, *it->second);
+  }
   return static_cast<int>(placed.size());
 }
 
@@ -962,7 +963,7 @@ void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
         if (it == map_points_.end()) return std::nullopt;
         return it->second;
       },
-      T_w_kf* f.T_kf_c, options_.pose_only);
+      T_w_kf * f.T_kf_c, options_.pose_only);
   if (r.status == PoseOnlyStatus::kOk) f.T_kf_c = T_w_kf.inverse() * r.T_w_c;
 }
 
