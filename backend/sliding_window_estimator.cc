@@ -393,7 +393,7 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
     // recovery and loop closure can still use them).
     RestartWindow();
   }
-  StartMonoMap(*init);
+  const int placed_before_reference = StartMonoMap(*init);
   initializer_.reset();
   reinit_.reset();
   out.valid = true;
@@ -407,8 +407,8 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
        << "from frame " << init->reference.frame << " (" << init->p_ref.size() << " points, "
        << init->ModelName() << ", median parallax " << init->two_view.median_parallax_deg
        << " deg)";
-  if (placed_before_reference_ > 0) {
-    note << "; " << placed_before_reference_ << " earlier frames placed in it";
+  if (placed_before_reference > 0) {
+    note << "; " << placed_before_reference << " earlier frames placed in it";
   }
   out.note = note.str();
   VLOG(1) << "frame " << m.frame << ": " << out.note;
@@ -429,7 +429,7 @@ Sim3 SlidingWindowEstimator::PlaceReinitializedMap(const MonoInitialization& ini
   return S;
 }
 
-void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
+int SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
   const size_t current_index = frames_.size();
   const size_t reference_index = current_index - init.between.size() - 1;
   CHECK_EQ(frames_.at(reference_index).t_ns, init.reference.t_ns);
@@ -459,7 +459,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
   frames_[reference_index] = {init.reference.t_ns, reference, Pose::Identity(), true};
   SolveWindow(current);
 
-  placed_before_reference_ = PlaceEarlierFrames(init, reference_index, reference, current);
+  const int placed_before_reference = PlaceEarlierFrames(init, reference_index, reference, current);
   // The frames between the two views, localised in the new map (their guess: interpolated).
   const double span = static_cast<double>(init.current.t_ns - init.reference.t_ns);
   std::optional<Pose> T_w_last;
@@ -486,6 +486,7 @@ void SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
                        : InterpolatePose(Pose::Identity(), T_w_prev_,
                                          1.0 / static_cast<double>(init.between.size() + 1));
   RememberLastKeyframe(current, init.current);
+  return placed_before_reference;
 }
 
 int SlidingWindowEstimator::PlaceEarlierFrames(const MonoInitialization& init,

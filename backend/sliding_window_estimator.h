@@ -266,7 +266,8 @@ class SlidingWindowEstimator : public Estimator {
   // Mono: feeds the initializer; on success builds the first two keyframes and localises the
   // frames between them.
   EstimatorOutput AddBeforeInitialization(const FrameMeasurement& m);
-  void StartMonoMap(const MonoInitialization& init);
+  // Returns how many frames before the reference it placed (PlaceEarlierFrames).
+  int StartMonoMap(const MonoInitialization& init);
   // The frames before the first map's reference (init.earlier, given up with older references)
   // localised in the new map, latest first, until one fails; returns how many.
   int PlaceEarlierFrames(const MonoInitialization& init, size_t reference_index,
@@ -389,8 +390,6 @@ class SlidingWindowEstimator : public Estimator {
   std::map<KeyframeId, size_t> first_frame_of_keyframe_;  // Its index in frames_.
   // Keyframes to cull once they leave the window, and the keyframe holding each one's place.
   std::map<KeyframeId, KeyframeId> held_by_;
-  // Frames before the first map's reference that StartMonoMap placed (for its note).
-  int placed_before_reference_ = 0;
   // The measured edges of the pose graph: every loop closed so far, and the edges culled
   // keyframes left to their holders (see the class comment, "Culling").
   std::vector<PoseGraphEdge> loop_edges_;

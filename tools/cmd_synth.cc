@@ -15,7 +15,8 @@
 DECLARE_string(out);  // tools/common_flags.cc
 DECLARE_double(fps);  // tools/common_flags.cc
 DEFINE_string(preset, "rover_loop",
-              "scene and camera path: rover_loop, flight, rotation, fast, low_texture, small_loop, false_loop");
+              "scene and camera path: rover_loop, flight, rotation, fast, low_texture, small_loop, "
+              "false_loop");
 DEFINE_int32(frames, 0, "number of frames (0 = the preset's default duration x fps)");
 DEFINE_uint64(seed, 1, "seed of the scene, textures and noise (same seed -> identical output)");
 DEFINE_bool(mono, false, "render the left camera only (no image_1)");
@@ -58,8 +59,8 @@ DEFINE_double(path_camera_height, 1.65,
 namespace dala {
 namespace {
 
-// The recorded path of --path from pose --path_first on, times from that pose (a KITTI file:
-// one pose per frame at `fps`).
+// The recorded path of --path from pose --path_first on (a KITTI file: one pose per frame at
+// `fps`); PlaceOnStreet counts its times from its first pose.
 std::vector<StampedPose> RecordedPathFlag(double fps) {
   const Trajectory trajectory =
       ReadTrajectory(FLAGS_path, ParseTrajectoryFormat(FLAGS_path_format));
@@ -71,8 +72,7 @@ std::vector<StampedPose> RecordedPathFlag(double fps) {
   for (size_t i = static_cast<size_t>(FLAGS_path_first); i < trajectory.size(); ++i) {
     StampedPose p = trajectory.poses[i];
     const size_t k = i - static_cast<size_t>(FLAGS_path_first);
-    p.t_ns = trajectory.has_timestamps ? p.t_ns - trajectory.poses[FLAGS_path_first].t_ns
-                                       : NsFromSeconds(static_cast<double>(k) / fps);
+    if (!trajectory.has_timestamps) p.t_ns = NsFromSeconds(static_cast<double>(k) / fps);
     path.push_back(p);
   }
   return path;

@@ -58,8 +58,9 @@ std::vector<StampedPose> PlaceOnStreet(const std::vector<StampedPose>& path, dou
   std::vector<double> height(n), arc(n, 0.0);
   for (size_t i = 0; i < n; ++i) {
     height[i] = up.dot(path[i].T_w_c.translation() - p_w0);
-    if (i > 0)
+    if (i > 0) {
       arc[i] = arc[i - 1] + (path[i].T_w_c.translation() - path[i - 1].T_w_c.translation()).norm();
+    }
   }
   std::vector<StampedPose> placed;
   placed.reserve(n);

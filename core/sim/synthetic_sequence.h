@@ -35,7 +35,8 @@ struct SimOptions {
   std::string preset = "rover_loop";
   // A recorded camera path to drive instead of the preset's (dala synth --path; core/sim/
   // recorded_path.h): T_w_c of the left camera at increasing times in any world frame, placed
-  // on a street lined with buildings, camera path_camera_height (m) above the ground (median).
+  // on a street lined with buildings, the camera path_camera_height (m) above the ground (slow
+  // climbs and descents levelled, PlaceOnStreet).
   // The ground truth is then in the street world's frame. Empty: the preset's world and path.
   std::vector<StampedPose> path;
   double path_camera_height = 1.65;

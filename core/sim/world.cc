@@ -303,7 +303,8 @@ void LineStreet(SimRng& rng, SceneBuilder& builder, const std::vector<Eigen::Vec
     *p = street[i] + a * (street[i + 1] - street[i]);
     *tangent = (street[i + 1] - street[i]).normalized();
   };
-  auto clear = [&](const Eigen::Vector2d& c, double yaw, double hl, double hd, double margin) {
+  // Whether a box may stand there; with `placed`, a box that may is recorded as standing.
+  auto may_stand = [&](const Eigen::Vector2d& c, double yaw, double hl, double hd, double margin) {
     for (const Eigen::Vector2d& q : clearance_samples) {
       if (DistanceToFootprint(q, c, yaw, hl, hd) < margin) return false;
     }
@@ -326,7 +327,7 @@ void LineStreet(SimRng& rng, SceneBuilder& builder, const std::vector<Eigen::Vec
       const double setback = kStreetHalfWidth + rng.Uniform(0, 1.5);
       const Eigen::Vector2d c = p + side * normal * (setback + depth / 2);
       const double yaw = std::atan2(tangent.y(), tangent.x());
-      if (clear(c, yaw, length / 2, depth / 2, kStreetHalfWidth - 0.2)) {
+      if (may_stand(c, yaw, length / 2, depth / 2, kStreetHalfWidth - 0.2)) {
         builder.AddBox(rng, c, ground_z, yaw, length, depth, height);
       }
       // Crates on the pavement in front of the buildings.
@@ -335,7 +336,7 @@ void LineStreet(SimRng& rng, SceneBuilder& builder, const std::vector<Eigen::Vec
         const Eigen::Vector2d cc = p + side * normal * rng.Uniform(4.2, 5.5) +
                                    tangent * rng.Uniform(-length / 3, length / 3);
         const double cyaw = yaw + rng.Uniform(-0.4, 0.4);
-        if (clear(cc, cyaw, size / 2, size / 2, 3.5)) {
+        if (may_stand(cc, cyaw, size / 2, size / 2, 3.5)) {
           builder.AddBox(rng, cc, ground_z, cyaw, size, size, size * rng.Uniform(0.7, 1.3));
         }
       }

@@ -225,16 +225,8 @@ TEST(KittiMonoE2e, FastForwardMotionStartsWithinAFrame) {
 TEST(KittiMonoE2e, AMapThatStartsLatePosesTheFramesBeforeIt) {
   DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
   const std::string out = ::testing::TempDir() + "/dala_kitti_mono_late_map";
-  std::filesystem::remove_all(out);
-  const testing::DalaCliResult r = testing::RunDala(
-      "run " + testing::SharedDataDir() +
-          "/kitti06_0000-0050 --mode mono --first_frame 4 --set ransac_order_seed=3 "
-          "--progress=false --out " +
-          out,
-      out);
-  ASSERT_EQ(r.status, 0) << r.log();
-  std::ifstream in(out + "/report.json");
-  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  const nlohmann::json report =
+      RunKitti("--mode mono --first_frame 4 --set ransac_order_seed=3", out);
   ASSERT_FALSE(report.is_discarded()) << "no report.json in " << out;
   std::string note;
   for (const nlohmann::json& f : report["frames"]) {
