@@ -159,6 +159,8 @@ void VisitFrontend(FrontendOptions* f, OptionVisitor* v) {
   v->Field("loop", "max_shift_y", &l.max_shift_y);
   v->Field("loop", "spatial_gate", &l.spatial_gate);
   v->Field("loop", "gate_fraction", &l.gate_fraction);
+  v->Field("loop", "gate_rotation_deg", &l.gate_rotation_deg);
+  v->Field("loop", "gate_rotation_deg_per_m", &l.gate_rotation_deg_per_m);
   v->Field("loop", "mono_gate_fraction", &l.mono_gate_fraction);
   v->Field("loop", "min_inlier_ratio", &l.min_inlier_ratio);
   v->Field("loop", "keyframes_between_loops", &l.keyframes_between_loops);

@@ -45,6 +45,8 @@ bool PlaceRecognitionOptions::IsValid(std::string* why) const {
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0))
     return fail("loop.min_inlier_ratio must be in [0, 1]");
   if (keyframes_between_loops < 0) return fail("loop.keyframes_between_loops must be >= 0");
+  if (!(gate_rotation_deg > 0.0) || !(gate_rotation_deg_per_m >= 0.0))
+    return fail("loop.gate_rotation_deg must be > 0 and loop.gate_rotation_deg_per_m >= 0");
   if (!(mono_gate_fraction > 0.0)) return fail("loop.mono_gate_fraction must be > 0");
   if (relocalise_below_mapped < 0) return fail("loop.relocalise_below_mapped must be >= 0");
   if (!(place_min_inlier_fraction >= 0.0 && place_min_inlier_fraction <= 1.0))
@@ -159,6 +161,16 @@ bool PlaceRecognition::WithinGate(const KeyframeEntry& old, const KeyframeEntry&
   return (t_w_cur - query.T_w_c.translation()).norm() <= radius;
 }
 
+bool PlaceRecognition::WithinRotationGate(const KeyframeEntry& old, const KeyframeEntry& query,
+                                          const Eigen::Matrix3d& R_w_cur) const {
+  if (!options_.spatial_gate || !rig_.is_stereo()) return true;
+  const double path = std::abs(query.path_length_m - old.path_length_m);
+  const double max_deg = options_.gate_rotation_deg + options_.gate_rotation_deg_per_m * path;
+  // The angle of R_w_dr^T R_w_cur: how far the loop would turn the dead-reckoned camera.
+  const Eigen::AngleAxisd turn(query.T_w_c.rotation().transpose() * R_w_cur);
+  return turn.angle() * 180.0 / M_PI <= max_deg;
+}
+
 bool PlaceRecognition::LeftAndCameBack(const KeyframeEntry& old,
                                        const KeyframeEntry& query) const {
   // Stereo: a camera that travelled less than twice the gate's radius since the old keyframe
@@ -214,7 +226,8 @@ std::optional<PlaceMatch> PlaceRecognition::Verify(
     return std::nullopt;
   }
   const Pose T_w_cur_loop = old.T_w_c * pnp->estimate.T_prev_cur;
-  if (gate && !WithinGate(old, query, T_w_cur_loop.translation())) {
+  if (gate && (!WithinGate(old, query, T_w_cur_loop.translation()) ||
+               !WithinRotationGate(old, query, T_w_cur_loop.rotation()))) {
     if (rejected_by_gate) *rejected_by_gate = true;
     return std::nullopt;
   }

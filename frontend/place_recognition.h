@@ -34,7 +34,8 @@
 //    of the recognised landmarks' two estimates, backend/mono/loop_sim3.h), and there is no
 //    PnP pose to gate. Accepted with >= min_inliers inliers, inliers / matches >=
 //    min_inlier_ratio, and (stereo) the PnP's implied current pose T_w_old * T_old_cur within
-//    the spatial gate of the dead-reckoned one.
+//    the spatial gate of the dead-reckoned one: its position as above, and its orientation
+//    within gate_rotation_deg + gate_rotation_deg_per_m x (path between the keyframes).
 //
 // Deterministic (seeded RANSAC, ordered scans, ties broken by frame id).
 //
@@ -84,6 +85,13 @@ struct PlaceRecognitionOptions {
   bool spatial_gate = true;
   double gate_radius_m = 5.0;
   double gate_fraction = 0.05;
+  // Stereo: the verified pose's orientation must lie within gate_rotation_deg +
+  // gate_rotation_deg_per_m x (path between the keyframes) of the dead-reckoned one. Stereo
+  // odometry drifts in heading by thousandths of a degree per metre (KITTI's best: ~0.003);
+  // a PnP on a repeated facade seen from elsewhere can put the camera anywhere, facing anywhere
+  // (on a rendered 1.26 km drive, a false loop turned it by 176 deg within the position gate).
+  double gate_rotation_deg = 10.0;
+  double gate_rotation_deg_per_m = 0.01;
   // Verification: matcher (no prior) and PnP (RANSAC + refinement, seeded).
   MatcherOptions matcher;
   MotionEstimatorOptions pnp = DefaultPnpOptions();
@@ -239,6 +247,10 @@ class PlaceRecognition {
   // |t_w - query.T_w_c.translation()| within the gate radius of (old, query).
   bool WithinGate(const KeyframeEntry& old, const KeyframeEntry& query,
                   const Eigen::Vector3d& t_w) const;
+  // The angle between R_w_cur and query.T_w_c's rotation within the rotation gate of (old,
+  // query); stereo only (one camera's verification has no pose: the estimator checks the loop).
+  bool WithinRotationGate(const KeyframeEntry& old, const KeyframeEntry& query,
+                          const Eigen::Matrix3d& R_w_cur) const;
 
   StereoRig rig_;
   PlaceRecognitionOptions options_;

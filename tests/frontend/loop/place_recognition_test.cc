@@ -1,7 +1,7 @@
 // Place recognition (frontend/place_recognition.h) on rendered views with exact poses: the
 // revisit of the small loop is found and its PnP pose matches ground truth; a place that looks
 // identical but lies 100 m further (false_loop) is verified by appearance and PnP alone, and
-// rejected by the spatial gate.
+// rejected by the spatial gate; a verified pose turned too far from the dead reckoning is too.
 #include "frontend/place_recognition.h"
 
 #include <gtest/gtest.h>
@@ -125,6 +125,37 @@ TEST(PlaceRecognition, FindsTheRevisitAndItsPose) {
   // Right after the loop the next keyframes are not searched (keyframes_between_loops).
   EXPECT_FALSE(pr.Detect(query, cur.detection, cur.stereo, cur.landmark).has_value());
   EXPECT_EQ(pr.last_stats().searched, 0);
+}
+
+// The gate bounds the orientation too: a verified pose turned from the dead-reckoned one by more
+// than gate_rotation_deg + gate_rotation_deg_per_m x path (10.5 deg here) is rejected, as a PnP
+// on a repeated facade seen from elsewhere would be; within it, accepted.
+TEST(PlaceRecognition, TheGateBoundsTheTurnALoopWouldMake) {
+  sim::SimOptions o;
+  o.preset = "small_loop";
+  const sim::SyntheticSequence seq(o);
+  const PlaceRecognitionOptions options;
+  const PlaceRecognition pr(seq.rig(), options);
+  const View old = MakeView(seq, 0, 0);
+  const size_t n = seq.size() - 2;
+  const View cur = MakeView(seq, n, 900000000);
+  const KeyframeEntry old_entry = Entry(pr, old, old.T_w_c, 0.0);
+  const double path = 50.0;
+  for (const double yaw_deg : {5.0, 30.0}) {
+    // Dead reckoning at the true position, turned about the camera's y axis (down: a yaw).
+    Pose T_w_dr = cur.T_w_c;
+    T_w_dr.linear() =
+        cur.T_w_c.linear() *
+        Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    bool rejected = false;
+    const std::optional<PlaceMatch> match =
+        pr.Verify(old_entry, Entry(pr, cur, T_w_dr, path), cur.detection, cur.stereo, cur.landmark,
+                  &rejected);
+    const bool within =
+        yaw_deg < options.gate_rotation_deg + options.gate_rotation_deg_per_m * path;
+    EXPECT_EQ(match.has_value(), within) << yaw_deg << " deg";
+    EXPECT_EQ(rejected, !within) << yaw_deg << " deg";
+  }
 }
 
 // One entry per place (issue 14): on the second lap of the rover loop, the keyframe that closes
@@ -299,6 +330,9 @@ TEST(PlaceRecognition, InvalidOptionsAreRejected) {
   EXPECT_FALSE(o.IsValid(&why));
   o = PlaceRecognitionOptions();
   o.gate_radius_m = 0;
+  EXPECT_FALSE(o.IsValid(&why));
+  o = PlaceRecognitionOptions();
+  o.gate_rotation_deg = 0;
   EXPECT_FALSE(o.IsValid(&why));
 }
 
