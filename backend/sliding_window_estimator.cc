@@ -387,32 +387,53 @@ EstimatorOutput SlidingWindowEstimator::AddBeforeInitialization(const FrameMeasu
     }
     return out;
   }
+  const std::string note = StartMapFrom(*init, /*current_reported=*/init->next.has_value());
+  if (init->next) {
+    // The checking frame is tracked in the new map as any frame after it (initializer_ is
+    // spent: Add does not come back here).
+    EstimatorOutput next = Add(*init->next);
+    next.note = note + "; checked by frame " + std::to_string(m.frame.value) +
+                (next.note.empty() ? "" : "; " + next.note);
+    return next;
+  }
+  out.valid = true;
+  out.T_w_c = T_w_prev_;
+  ReportLandmarks(&out);
+  out.note = note;
+  return out;
+}
+
+std::string SlidingWindowEstimator::StartMapFrom(const MonoInitialization& init,
+                                                bool current_reported) {
+  if (current_reported) {
+    // A pair checked by a later frame (or still waiting at the end of the run): its current
+    // frame was reported initialising, the last so far; that record goes, StartMonoMap writes
+    // it again with the map.
+    CHECK(!frames_.empty() && frames_.back().t_ns == init.current.t_ns);
+    frames_.pop_back();
+  }
   const bool reinitialised = reinit_.has_value();
   if (reinitialised) {
     // The new map starts in a window of its own; the old landmarks keep their positions (PnP
     // recovery and loop closure can still use them).
     RestartWindow();
   }
-  const int placed_before_reference = StartMonoMap(*init);
+  const int placed_before_reference = StartMonoMap(init);
   initializer_.reset();
   reinit_.reset();
-  out.valid = true;
-  out.T_w_c = T_w_prev_;
-  ReportLandmarks(&out);
   std::ostringstream note;
   note.precision(3);
   note << (reinitialised ? "re-initialised (a new map placed at the extrapolated pose with the "
                            "last speed: scale and heading across the gap are guesses) "
                          : "initialised ")
-       << "from frame " << init->reference.frame << " (" << init->p_ref.size() << " points, "
-       << init->ModelName() << ", median parallax " << init->two_view.median_parallax_deg
+       << "from frame " << init.reference.frame << " (" << init.p_ref.size() << " points, "
+       << init.ModelName() << ", median parallax " << init.two_view.median_parallax_deg
        << " deg)";
   if (placed_before_reference > 0) {
     note << "; " << placed_before_reference << " earlier frames placed in it";
   }
-  out.note = note.str();
-  VLOG(1) << "frame " << m.frame << ": " << out.note;
-  return out;
+  VLOG(1) << "frame " << init.current.frame << ": " << note.str();
+  return note.str();
 }
 
 Sim3 SlidingWindowEstimator::PlaceReinitializedMap(const MonoInitialization& init) const {
@@ -970,6 +991,14 @@ void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
 
 RefinementSummary SlidingWindowEstimator::Refine() {
   WaitForWindowSolve();
+  // One camera: a first pair found at the last frame had no next frame to check it; the map
+  // starts from it unchecked, so that its frames have poses rather than none.
+  if (initializer_) {
+    if (std::optional<MonoInitialization> pair = initializer_->TakeWaitingPair()) {
+      StartMapFrom(*pair, /*current_reported=*/true);
+      WaitForWindowSolve();
+    }
+  }
   RefineWaitingFrames(/*all=*/true);  // The frames of the last window's keyframes.
   RefinementSummary out;
   if (options_.final_ba == "off") {

@@ -195,7 +195,12 @@ struct SlidingWindowEstimatorOptions {
   double tracking_sigma_px = 1.0;
   // observation_sigma_px with -1 resolved for the rig.
   double WindowSigmaPx(const StereoRig& rig) const;
-  MonoInitializerOptions mono_init;  // One camera: the two-view initialisation.
+  // One camera: the two-view initialisation, its pair checked by the next frame.
+  MonoInitializerOptions mono_init = [] {
+    MonoInitializerOptions o;
+    o.next_frame_min_inlier_ratio = 0.5;
+    return o;
+  }();
   // The order of the correspondences handed to OpenCV's RANSAC in the mono PnP recovery, which
   // is what seeds its draws (core/ransac_order.h): 0 as given.
   uint64_t ransac_order_seed = 0;
@@ -276,6 +281,10 @@ class SlidingWindowEstimator : public Estimator {
   // pose, and after mono_reinit_after_lost_frames of them a re-initialisation.
   void NoteMonoTracking(const FrameMeasurement& m, bool valid, const Pose& T_w_c,
                         EstimatorOutput* out);
+  // Starts the map of `init` (StartMonoMap; after a loss in a window of its own) and spends the
+  // initializer; the note that says so. `current_reported`: init.current is the last frame
+  // added (reported initialising), not the one being added.
+  std::string StartMapFrom(const MonoInitialization& init, bool current_reported);
   // The new map's reference camera in the world after a re-initialisation (see the .cc).
   Sim3 PlaceReinitializedMap(const MonoInitialization& init) const;
   // The initial guess of the current frame's pose (see the class comment).

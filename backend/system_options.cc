@@ -259,6 +259,7 @@ void VisitBa(SlidingWindowEstimatorOptions* b, OptionVisitor* v) {
   v->Field("mono_init", "min_reference_features", &mi.min_reference_features);
   v->Field("mono_init", "max_pending_frames", &mi.max_pending_frames);
   v->BeginExperimental();
+  v->Field("mono_init", "next_frame_min_inlier_ratio", &mi.next_frame_min_inlier_ratio);
   v->Field("mono_init", "min_point_parallax_deg", &mi.two_view.min_point_parallax_deg);
   v->Field("mono_init", "min_residual_parallax_deg", &mi.two_view.min_residual_parallax_deg);
   v->Field("mono_init", "min_cells", &mi.two_view.min_cells);

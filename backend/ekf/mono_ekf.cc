@@ -77,7 +77,11 @@ MonoEkfEstimator::MonoEkfEstimator(const PinholeCamera& camera, const MonoEkfOpt
   if (options.prediction == "motion") {
     prediction_ = Prediction::kMotion;
   } else {
-    initializer_.emplace(camera, options.mono_init);
+    // The filter starts from the pair as found: it has no window to track the checking frame
+    // in, and weighs the next frames itself.
+    MonoInitializerOptions init_options = options.mono_init;
+    init_options.next_frame_min_inlier_ratio = 0.0;
+    initializer_.emplace(camera, init_options);
     if (options.prediction == "constant_velocity") SwitchToConstantVelocity();
   }
 }

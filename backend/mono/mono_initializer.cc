@@ -3,10 +3,16 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <unordered_map>
 
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "backend/ba/ba_types.h"
 #include "backend/mono/refined_two_view.h"
+#include "core/ransac_order.h"
 
 namespace dala {
 
@@ -19,6 +25,8 @@ bool MonoInitializerOptions::IsValid(std::string* why) const {
   if (min_reference_features < two_view.min_points)
     return fail("mono_init.min_reference_features must be >= mono_init.min_points");
   if (max_pending_frames < 1) return fail("mono_init.max_pending_frames must be >= 1");
+  if (!(next_frame_min_inlier_ratio >= 0.0 && next_frame_min_inlier_ratio <= 1.0))
+    return fail("mono_init.next_frame_min_inlier_ratio must be in [0, 1]");
   return true;
 }
 
@@ -53,6 +61,7 @@ void MonoInitializer::Reset() {
   reference_.reset();
   between_.clear();
   earlier_.clear();
+  pair_.reset();
   reason_.clear();
 }
 
@@ -98,7 +107,86 @@ std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasuremen
   return init;
 }
 
+double MonoInitializer::NextFrameInlierRatio(const MonoInitialization& pair,
+                                             const FrameMeasurement& m, int* observed) const {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (const FeatureObservation& o : m.observations) {
+    const auto it = pair.p_ref.find(o.landmark);
+    if (it == pair.p_ref.end()) continue;
+    object.emplace_back(it->second.x(), it->second.y(), it->second.z());
+    image.emplace_back(o.uv.x(), o.uv.y());
+  }
+  *observed = static_cast<int>(object.size());
+  constexpr int kMinObserved = 6;
+  if (*observed < kMinObserved) return 0.0;
+  cv::Mat K;
+  cv::eigen2cv(camera_.K(), K);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  const std::vector<int> order = RansacOrder(object.size(), options_.two_view.ransac_order_seed);
+  // The chi-square 95 % bound of a 1-pixel observation (2 dof), as the window's tracking.
+  const bool found = cv::solvePnPRansac(
+      Reordered(object, order), Reordered(image, order), K, cv::noArray(), rvec, tvec, false, 200,
+      std::sqrt(kChi2Quantile95Dof2), 0.999, inliers, cv::SOLVEPNP_EPNP);
+  return found ? static_cast<double>(inliers.size()) / *observed : 0.0;
+}
+
 std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m) {
+  if (pair_) {
+    int observed = 0;
+    const double ratio = NextFrameInlierRatio(*pair_, m, &observed);
+    VLOG(1) << "first pair " << pair_->reference.frame << "-" << pair_->current.frame
+            << ": frame " << m.frame << " keeps " << ratio << " of " << observed << " points";
+    if (ratio >= options_.next_frame_min_inlier_ratio) {
+      MonoInitialization init = std::move(*pair_);
+      init.next = m;
+      Reset();
+      reason_ = "initialised";
+      return init;
+    }
+    // Dropped: the initialiser is back where it was before the pair, the pair's current frame
+    // now one of the frames between the reference and m.
+    std::ostringstream why;
+    why.precision(2);
+    why << "the pair of frames " << pair_->reference.frame << " and " << pair_->current.frame
+        << " failed the next frame's check (" << ratio << " of " << observed
+        << " points kept; ";
+    MonoInitialization& dropped = *pair_;
+    reference_ = std::move(dropped.reference);
+    between_ = std::move(dropped.between);
+    between_.push_back(std::move(dropped.current));
+    earlier_.assign(std::make_move_iterator(dropped.earlier.begin()),
+                    std::make_move_iterator(dropped.earlier.end()));
+    pair_.reset();
+    std::optional<MonoInitialization> found = FindPair(m);
+    if (found) {
+      pair_ = std::move(found);
+      reason_ = why.str() + "checking the pair of frames " +
+                std::to_string(pair_->reference.frame.value) + " and " +
+                std::to_string(m.frame.value) + " against the next frame)";
+      return std::nullopt;
+    }
+    reason_ = why.str() + reason_ + ")";
+    return std::nullopt;
+  }
+  std::optional<MonoInitialization> found = FindPair(m);
+  if (!found || options_.next_frame_min_inlier_ratio <= 0.0) return found;
+  pair_ = std::move(found);
+  reason_ = "checking the pair of frames " + std::to_string(pair_->reference.frame.value) +
+            " and " + std::to_string(m.frame.value) + " against the next frame";
+  return std::nullopt;
+}
+
+std::optional<MonoInitialization> MonoInitializer::TakeWaitingPair() {
+  if (!pair_) return std::nullopt;
+  std::optional<MonoInitialization> pair = std::move(pair_);
+  Reset();
+  reason_ = "initialised";
+  return pair;
+}
+
+std::optional<MonoInitialization> MonoInitializer::FindPair(const FrameMeasurement& m) {
   const auto start_reference = [&](const std::string& why) {
     GiveUp(between_.size());
     between_.clear();

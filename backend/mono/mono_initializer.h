@@ -48,6 +48,13 @@ struct MonoInitializerOptions {
   int min_reference_features = 100;
   int max_pending_frames = 60;  // Reference older than this: a new reference.
   bool refine = true;           // Two-view BA of the accepted reconstruction.
+  // The next frame checks an accepted pair (0: no check): a PnP (seeded RANSAC, 2.45 px) of the
+  // pair's points in it must keep at least this fraction of those it observes, else the pair is
+  // dropped and the initialiser goes on with the next frame as the current one. The pairs
+  // measured keep 88-100 %; a pair whose motion or depths are off keeps fewer. The estimator
+  // then tracks the checking frame in the new map: it was matched by the frontend before the
+  // map existed (docs/monocular.md, "The first pair checked by the next frame").
+  double next_frame_min_inlier_ratio = 0.0;
 
   bool IsValid(std::string* why) const;
 };
@@ -58,6 +65,9 @@ struct MonoInitialization {
   std::vector<FrameMeasurement> earlier;
   std::vector<FrameMeasurement> between;  // After the reference, before the current frame.
   FrameMeasurement current;
+  // The frame after `current` that checked the pair (next_frame_min_inlier_ratio > 0); the
+  // estimator tracks it in the new map. nullopt without the check.
+  std::optional<FrameMeasurement> next;
   Pose T_ref_cur = Pose::Identity();            // |translation| = 1.
   std::map<LandmarkId, Eigen::Vector3d> p_ref;  // Landmarks in the reference camera.
   TwoViewResult two_view;
@@ -73,8 +83,13 @@ class MonoInitializer {
   MonoInitializer(const PinholeCamera& camera, const MonoInitializerOptions& options);
 
   // Feeds the next frame; returns the initialisation when it succeeds at this frame (the
-  // initializer is then spent: call Reset to start again). When it does not, reason() says why.
+  // initializer is then spent: call Reset to start again): with the next-frame check, the pair
+  // found at the frame before, checked by this one (MonoInitialization::next). When it does not,
+  // reason() says why.
   std::optional<MonoInitialization> Add(const FrameMeasurement& m);
+  // The pair waiting for its next frame's check, unchecked (the run ended before that frame);
+  // the initializer is then spent. nullopt when no pair waits.
+  std::optional<MonoInitialization> TakeWaitingPair();
   // "no reference frame yet (N features < 100)", "too little parallax: ...", etc.
   const std::string& reason() const { return reason_; }
   void Reset();
@@ -92,6 +107,13 @@ class MonoInitializer {
                                             const FrameMeasurement& m, const Correspondences& c,
                                             std::string* why_not) const;
 
+  // Add without the next-frame check: the pair found at m, if any.
+  std::optional<MonoInitialization> FindPair(const FrameMeasurement& m);
+  // The fraction of the pair's points that m observes and a PnP keeps (0 with fewer than 6),
+  // and how many it observes.
+  double NextFrameInlierRatio(const MonoInitialization& pair, const FrameMeasurement& m,
+                              int* observed) const;
+
   // Keeps the frames of a reference given up (the reference and the first `count` frames after
   // it) in earlier_, the latest kMaxEarlierFrames.
   void GiveUp(size_t count);
@@ -101,6 +123,7 @@ class MonoInitializer {
   std::optional<FrameMeasurement> reference_;
   std::vector<FrameMeasurement> between_;
   std::deque<FrameMeasurement> earlier_;
+  std::optional<MonoInitialization> pair_;  // Found, waiting for the next frame's check.
   std::string reason_;
 };
 

@@ -20,9 +20,10 @@
 //   run above: one run moves that much with the RANSAC draws, docs/results.md "ba.sigma_px");
 //   bounds 1.5x each.
 // - The BA from every third left image (about 3 m per frame, a motorway's speed at 10 Hz), from
-//   frames 0, 1 and 2: the first pose by frame 1 of each (without matching free of the
-//   rotation-only prediction while the map does not exist: frames 4, 10 and 14), no frame lost
-//   after it; worst Sim(3) ATE 0.0556 m over ~55 m, bound 1.5x.
+//   frames 0, 1 and 2, and from frame 0 at RANSAC draws 1 and 2: the map starts by frame 2 of
+//   each (its first pair checked by the next frame; without matching free of the rotation-only
+//   prediction while the map does not exist: frames 4, 10 and 14), every frame has a pose, no
+//   frame is lost; worst Sim(3) ATE 0.0709 m over ~55 m (offset 0, draw 0), bound 1.5x.
 // The path (60 m) is shorter than KITTI's shortest segment (100 m): no segment errors here.
 #include <gtest/gtest.h>
 
@@ -187,16 +188,21 @@ std::string EveryThirdFrame(int offset) {
   return dst.string();
 }
 
-// Fast forward motion with one camera: the first pose by the second frame, none lost after it.
-TEST(KittiMonoE2e, FastForwardMotionStartsWithinAFrame) {
+// Fast forward motion with one camera: the map starts by the third frame (its first pair,
+// frames 0 and 1, checked by frame 2), every frame has a pose, none is lost after the first.
+// From frame 0 also at RANSAC draws 1 and 2, where a pair tracked without waiting for its
+// check lost the map (0.50 m, and 0.65 m with 11 of 17 frames lost).
+TEST(KittiMonoE2e, FastForwardMotionStartsWithinTwoFrames) {
   DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
   double worst_ate = 0.0;
-  for (const int offset : {0, 1, 2}) {
+  for (const auto& [offset, draw] : {std::pair{0, 0}, {1, 0}, {2, 0}, {0, 1}, {0, 2}}) {
     const std::string data = EveryThirdFrame(offset);
     const std::string out = data + "_out";
     std::filesystem::remove_all(out);
     const testing::DalaCliResult r =
-        testing::RunDala("run " + data + " --mode mono --progress=false --out " + out, out);
+        testing::RunDala("run " + data + " --mode mono --progress=false --set ransac_order_seed=" +
+                             std::to_string(draw) + " --out " + out,
+                         out);
     ASSERT_EQ(r.status, 0) << r.log();
     std::ifstream in(out + "/report.json");
     const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
@@ -207,16 +213,20 @@ TEST(KittiMonoE2e, FastForwardMotionStartsWithinAFrame) {
       if (valid && first_pose < 0) first_pose = f["frame"].get<int>();
       if (first_pose >= 0 && !valid) ++lost_after;
     }
-    const double ate = report["summary"]["ate"]["rmse"].get<double>();
-    std::cout << "[ measured ] ba/mono KITTI 06 every third frame from " << offset
-              << ": first pose at frame " << first_pose << ", Sim(3) ATE " << ate << " m"
+    const nlohmann::json& s = report["summary"];
+    const double ate = s["ate"]["rmse"].get<double>();
+    std::cout << "[ measured ] ba/mono KITTI 06 every third frame from " << offset << ", draw "
+              << draw << ": first pose at frame " << first_pose << ", Sim(3) ATE " << ate << " m"
               << std::endl;
-    EXPECT_EQ(first_pose, 1) << "offset " << offset;
-    EXPECT_EQ(lost_after, 0) << "offset " << offset;
+    EXPECT_LE(first_pose, 2) << "offset " << offset << ", draw " << draw;
+    EXPECT_EQ(lost_after, 0) << "offset " << offset << ", draw " << draw;
+    EXPECT_EQ(s["frames_with_pose"].get<int>(), s["frames"].get<int>())
+        << "offset " << offset << ", draw " << draw;
     worst_ate = std::max(worst_ate, ate);
   }
-  testing::ExpectWithinBound("ba/mono KITTI 06 every third frame, worst of 3 offsets, ATE",
-                             worst_ate, 0.0556, "m");
+  testing::ExpectWithinBound(
+      "ba/mono KITTI 06 every third frame, worst of 3 offsets and 3 draws from frame 0, ATE",
+      worst_ate, 0.0709, "m");
 }
 
 // One camera from frame 4 at RANSAC draw 3: frame 4's tracks are gone before a pair with it

@@ -1,12 +1,14 @@
 // MonoInitializer's choice of reference frame: when the reference's tracks are gone, the oldest
 // frame since then that shares a reference's worth of tracks with the current one is tried as
 // its reference, and kept if the pair initialises at once; the frames of the references given
-// up are handed over with the initialisation.
+// up are handed over with the initialisation. With the next-frame check, a pair waits for the
+// next frame, which keeps it or drops it.
 
 #include "backend/mono/mono_initializer.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -116,6 +118,79 @@ TEST(MonoInitializer, AFrameBetweenThatDoesNotInitialiseNowIsNotKept) {
   EXPECT_FALSE(init.Add(drive.Frame(2, 0.08, {{50, 80}, {200, 350}, {400, 600}})));
   EXPECT_NE(init.reason().find("frame 1 as the reference: "), std::string::npos) << init.reason();
   EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos) << init.reason();
+}
+
+MonoInitializerOptions Checked() {
+  MonoInitializerOptions o;
+  o.next_frame_min_inlier_ratio = 0.5;
+  return o;
+}
+
+TEST(MonoInitializer, ThePairWaitsForTheNextFrameWhichChecksIt) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), Checked());
+  AddTheWeakPair(drive, &init);
+  // Frame 2, 1.5 m on, makes a pair with frame 1; it is held until frame 3 sees its points
+  // where the pair's motion and depths put them.
+  EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 350}, {400, 600}})));
+  EXPECT_NE(init.reason().find("checking the pair of frames 1 and 2"), std::string::npos)
+      << init.reason();
+  const std::optional<MonoInitialization> result =
+      init.Add(drive.Frame(3, 1.9, {{200, 350}, {400, 600}}));
+  ASSERT_TRUE(result) << init.reason();
+  EXPECT_EQ(result->reference.frame, FrameId(1));
+  EXPECT_EQ(result->current.frame, FrameId(2));
+  ASSERT_TRUE(result->next);
+  EXPECT_EQ(result->next->frame, FrameId(3));
+  ASSERT_EQ(result->earlier.size(), 1u);
+  EXPECT_EQ(result->earlier[0].frame, FrameId(0));
+}
+
+// A run that ends while the pair waits: the pair, unchecked.
+TEST(MonoInitializer, TheWaitingPairIsHandedOverUncheckedAtTheEnd) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), Checked());
+  AddTheWeakPair(drive, &init);
+  EXPECT_FALSE(init.TakeWaitingPair());
+  EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 350}, {400, 600}})));
+  const std::optional<MonoInitialization> pair = init.TakeWaitingPair();
+  ASSERT_TRUE(pair);
+  EXPECT_EQ(pair->reference.frame, FrameId(1));
+  EXPECT_EQ(pair->current.frame, FrameId(2));
+  EXPECT_FALSE(pair->next);
+  EXPECT_FALSE(init.TakeWaitingPair());
+}
+
+TEST(MonoInitializer, APairTheNextFrameContradictsIsDropped) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), Checked());
+  AddTheWeakPair(drive, &init);
+  EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 350}, {400, 600}})));
+  // Frame 3 sees the pair's points, but each where another one is: no motion explains them.
+  FrameMeasurement scrambled = drive.Frame(3, 1.9, {{200, 350}, {400, 600}});
+  std::vector<Eigen::Vector2d> uv;
+  for (const FeatureObservation& o : scrambled.observations) uv.push_back(o.uv);
+  std::shuffle(uv.begin(), uv.end(), std::mt19937(3));
+  for (size_t i = 0; i < uv.size(); ++i) scrambled.observations[i].uv = uv[i];
+  EXPECT_FALSE(init.Add(scrambled));
+  EXPECT_NE(init.reason().find("the pair of frames 1 and 2 failed the next frame's check"),
+            std::string::npos)
+      << init.reason();
+  // The initialiser goes on from frame 1: frame 4 makes a pair with it (frames 2 and 3
+  // between), which frame 5 keeps.
+  EXPECT_FALSE(init.Add(drive.Frame(4, 2.2, {{200, 350}, {400, 600}})));
+  const std::optional<MonoInitialization> result =
+      init.Add(drive.Frame(5, 2.5, {{200, 350}, {400, 600}}));
+  ASSERT_TRUE(result) << init.reason();
+  EXPECT_EQ(result->reference.frame, FrameId(1));
+  ASSERT_EQ(result->between.size(), 2u);
+  EXPECT_EQ(result->between[0].frame, FrameId(2));
+  EXPECT_EQ(result->between[1].frame, FrameId(3));
+  EXPECT_EQ(result->current.frame, FrameId(4));
+  ASSERT_TRUE(result->next);
+  EXPECT_EQ(result->next->frame, FrameId(5));
+  ASSERT_EQ(result->earlier.size(), 1u);
+  EXPECT_EQ(result->earlier[0].frame, FrameId(0));
 }
 
 }  // namespace
