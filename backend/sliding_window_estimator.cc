@@ -991,8 +991,11 @@ void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
 
 RefinementSummary SlidingWindowEstimator::Refine() {
   WaitForWindowSolve();
-  // One camera: a first pair found at the last frame had no next frame to check it; the map
-  // starts from it unchecked, so that its frames have poses rather than none.
+  // One camera: a pair (the first map's, or a new map's after a loss) found at the last frame
+  // had no next frame to check it; the map starts from it unchecked, so that its frames have
+  // poses rather than none. Only here: a run that never calls Refine (an interrupted one)
+  // leaves those frames without a pose, and the online trajectory taken before Refine lacks
+  // them.
   if (initializer_) {
     if (std::optional<MonoInitialization> pair = initializer_->TakeWaitingPair()) {
       StartMapFrom(*pair, /*current_reported=*/true);

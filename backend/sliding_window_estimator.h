@@ -283,7 +283,8 @@ class SlidingWindowEstimator : public Estimator {
                         EstimatorOutput* out);
   // Starts the map of `init` (StartMonoMap; after a loss in a window of its own) and spends the
   // initializer; the note that says so. `current_reported`: init.current is the last frame
-  // added (reported initialising), not the one being added.
+  // added (reported without a pose: initialising, or lost during a re-initialisation), not the
+  // one being added.
   std::string StartMapFrom(const MonoInitialization& init, bool current_reported);
   // The new map's reference camera in the world after a re-initialisation (see the .cc).
   Sim3 PlaceReinitializedMap(const MonoInitialization& init) const;

@@ -12,6 +12,7 @@ per frame. With --write, the table replaces the text between `<!-- MARKER:begin 
 import argparse
 import json
 import os
+import sys
 
 from markdown_block import print_or_write
 
@@ -19,20 +20,24 @@ from markdown_block import print_or_write
 def row(label, folder):
     with open(os.path.join(folder, "report.json")) as f:
         s = json.load(f)["summary"]
+    if "ate" not in s:
+        sys.exit("runs_table: %s/report.json has no ATE (a run without ground truth)" % folder)
     refinement = s.get("refinement", {})
     global_ba = refinement.get("done", False)
     online = s.get("online", {}).get("ate", {}).get("rmse") if global_ba else s["ate"]["rmse"]
     scale = s.get("scale_along_path", {})
-    return "| %s | %d / %d | %d | %d | %s | %.4f m | %s | %s | %.0f MiB | %.1f ms |" % (
+    return "| %s | %d / %d | %d | %d | %s | %s | %s | %s | %.0f MiB | %.1f ms |" % (
         label, s["frames_with_pose"], s["frames"], s["keyframes_in_map"], s["loops_closed"],
-        "%.4f m" % s["ate"]["rmse"] if global_ba else "-", online,
-        "%.3f-%.3f" % (scale["min"], scale["max"]) if scale else "-",
+        "%.4f m" % s["ate"]["rmse"] if global_ba else "-",
+        "%.4f m" % online if online is not None else "-",
+        "%.3f-%.3f" % (scale["min"], scale["max"]) if scale.get("segments") else "-",
         "%.0f s" % refinement["time_s"] if global_ba else "off", s["peak_rss_mb"], s["ms_median"])
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("runs", nargs="+", metavar="LABEL=DIR")
+    parser.add_argument("runs", nargs="+", metavar="LABEL=DIR",
+                        help="LABEL may hold '=' (the last one splits); DIR may not")
     parser.add_argument("--write", metavar="FILE", help="rewrite the marked block of FILE")
     parser.add_argument("--marker", default="runs", help="the block's name in FILE")
     args = parser.parse_args()

@@ -107,6 +107,14 @@ std::optional<MonoInitialization> MonoInitializer::TryPair(const FrameMeasuremen
   return init;
 }
 
+namespace {
+
+// The next-frame check needs at least this many of the pair's points in the frame (a PnP's
+// sample plus a few to vote).
+constexpr int kMinObservedToCheck = 6;
+
+}  // namespace
+
 double MonoInitializer::NextFrameInlierRatio(const MonoInitialization& pair,
                                              const FrameMeasurement& m, int* observed) const {
   std::vector<cv::Point3d> object;
@@ -118,8 +126,7 @@ double MonoInitializer::NextFrameInlierRatio(const MonoInitialization& pair,
     image.emplace_back(o.uv.x(), o.uv.y());
   }
   *observed = static_cast<int>(object.size());
-  constexpr int kMinObserved = 6;
-  if (*observed < kMinObserved) return 0.0;
+  if (*observed < kMinObservedToCheck) return 0.0;
   cv::Mat K;
   cv::eigen2cv(camera_.K(), K);
   cv::Mat rvec, tvec;
@@ -138,15 +145,18 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
     const double ratio = NextFrameInlierRatio(*pair_, m, &observed);
     VLOG(1) << "first pair " << pair_->reference.frame << "-" << pair_->current.frame
             << ": frame " << m.frame << " keeps " << ratio << " of " << observed << " points";
-    if (ratio >= options_.next_frame_min_inlier_ratio) {
+    // A frame that sees too few of the pair's points (blank, blurred) is no evidence against
+    // it: the map starts as it would without the check, and that frame is tracked in it.
+    if (observed < kMinObservedToCheck || ratio >= options_.next_frame_min_inlier_ratio) {
       MonoInitialization init = std::move(*pair_);
       init.next = m;
       Reset();
       reason_ = "initialised";
       return init;
     }
-    // Dropped: the initialiser is back where it was before the pair, the pair's current frame
-    // now one of the frames between the reference and m.
+    // Dropped: the initialiser goes on from the pair's reference (after the lost-reference
+    // path of FindPair, the frame between it chose; the frames before it stay earlier), the
+    // pair's current frame now one of the frames between the reference and m.
     std::ostringstream why;
     why.precision(2);
     why << "the pair of frames " << pair_->reference.frame << " and " << pair_->current.frame

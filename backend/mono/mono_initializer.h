@@ -50,8 +50,10 @@ struct MonoInitializerOptions {
   bool refine = true;           // Two-view BA of the accepted reconstruction.
   // The next frame checks an accepted pair (0: no check): a PnP (seeded RANSAC, 2.45 px) of the
   // pair's points in it must keep at least this fraction of those it observes, else the pair is
-  // dropped and the initialiser goes on with the next frame as the current one. The pairs
-  // measured keep 88-100 %; a pair whose motion or depths are off keeps fewer. The estimator
+  // dropped and the initialiser goes on with the next frame as the current one (a frame that
+  // sees fewer than 6 of the points is no evidence: the pair is kept). The pairs measured keep
+  // 88-100 %; a pair whose points do not fit one pose of the next frame keeps fewer (a wrong
+  // reconstruction that is consistent in itself can pass). The estimator
   // then tracks the checking frame in the new map: it was matched by the frontend before the
   // map existed (docs/monocular.md, "The first pair checked by the next frame").
   double next_frame_min_inlier_ratio = 0.0;
@@ -109,8 +111,8 @@ class MonoInitializer {
 
   // Add without the next-frame check: the pair found at m, if any.
   std::optional<MonoInitialization> FindPair(const FrameMeasurement& m);
-  // The fraction of the pair's points that m observes and a PnP keeps (0 with fewer than 6),
-  // and how many it observes.
+  // The fraction of the pair's points that m observes and a PnP keeps (0 with fewer than
+  // kMinObservedToCheck), and how many it observes.
   double NextFrameInlierRatio(const MonoInitialization& pair, const FrameMeasurement& m,
                               int* observed) const;
 

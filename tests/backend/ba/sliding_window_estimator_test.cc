@@ -67,6 +67,9 @@ struct MonoScene {
 TEST(SlidingWindowEstimatorTest, NewMonoLandmarksTakeEveryWindowKeyframesView) {
   const MonoScene scene;
   SlidingWindowEstimatorOptions options;
+  // The map starts from the pair (0, 1) at frame 1, without waiting for the next frame's check
+  // (which mono_initializer_test.cc and the KITTI e2e test cover): keyframe k is frame k.
+  options.mono_init.next_frame_min_inlier_ratio = 0.0;
   options.max_new_landmarks_per_keyframe = 10;  // Few per keyframe: the rest wait, and age.
   options.background_solve = false;
   SlidingWindowEstimator estimator(scene.rig, options);
@@ -123,6 +126,9 @@ struct FusionRun {
 FusionRun RunWithBrokenTracks(double fuse_radius_px) {
   const MonoScene scene;
   SlidingWindowEstimatorOptions options;
+  // The map starts from the pair (0, 1) at frame 1, without waiting for the next frame's check
+  // (which mono_initializer_test.cc and the KITTI e2e test cover): keyframe k is frame k.
+  options.mono_init.next_frame_min_inlier_ratio = 0.0;
   options.background_solve = false;
   options.ba.fuse_radius_px = fuse_radius_px;
   SlidingWindowEstimator estimator(scene.rig, options);
@@ -178,6 +184,9 @@ TEST(SlidingWindowEstimatorTest, ARestartedTrackIsFusedIntoItsLandmarkWhenAsked)
 double DisplacedViewsKept(double observation_sigma_px, double frontend_sigma_px) {
   const MonoScene scene;
   SlidingWindowEstimatorOptions options;
+  // The map starts from the pair (0, 1) at frame 1, without waiting for the next frame's check
+  // (which mono_initializer_test.cc and the KITTI e2e test cover): keyframe k is frame k.
+  options.mono_init.next_frame_min_inlier_ratio = 0.0;
   options.background_solve = false;
   options.observation_sigma_px = observation_sigma_px;
   SlidingWindowEstimator estimator(scene.rig, options);

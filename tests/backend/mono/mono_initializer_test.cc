@@ -146,6 +146,35 @@ TEST(MonoInitializer, ThePairWaitsForTheNextFrameWhichChecksIt) {
   EXPECT_EQ(result->earlier[0].frame, FrameId(0));
 }
 
+// A pair with the reference itself, dropped: the reference stays, the frames after it wait.
+TEST(MonoInitializer, ADroppedPairKeepsItsReference) {
+  const ForwardDrive drive;
+  MonoInitializer init(KittiGeometryCamera(), Checked());
+  EXPECT_FALSE(init.Add(drive.Frame(0, 0.0, {{0, 300}})));
+  EXPECT_FALSE(init.Add(drive.Frame(1, 0.05, {{0, 300}})));  // Too little parallax.
+  EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{0, 300}})));
+  EXPECT_NE(init.reason().find("checking the pair of frames 0 and 2"), std::string::npos)
+      << init.reason();
+  FrameMeasurement scrambled = drive.Frame(3, 1.9, {{0, 300}});
+  std::vector<Eigen::Vector2d> uv;
+  for (const FeatureObservation& o : scrambled.observations) uv.push_back(o.uv);
+  std::shuffle(uv.begin(), uv.end(), std::mt19937(4));
+  for (size_t i = 0; i < uv.size(); ++i) scrambled.observations[i].uv = uv[i];
+  EXPECT_FALSE(init.Add(scrambled));
+  EXPECT_NE(init.reason().find("the pair of frames 0 and 2 failed the next frame's check"),
+            std::string::npos)
+      << init.reason();
+  EXPECT_FALSE(init.Add(drive.Frame(4, 2.2, {{0, 300}})));
+  const std::optional<MonoInitialization> result = init.Add(drive.Frame(5, 2.5, {{0, 300}}));
+  ASSERT_TRUE(result) << init.reason();
+  EXPECT_EQ(result->reference.frame, FrameId(0));
+  ASSERT_EQ(result->between.size(), 3u);
+  EXPECT_EQ(result->between[0].frame, FrameId(1));
+  EXPECT_EQ(result->between[2].frame, FrameId(3));
+  EXPECT_EQ(result->current.frame, FrameId(4));
+  EXPECT_TRUE(result->earlier.empty());
+}
+
 // A run that ends while the pair waits: the pair, unchecked.
 TEST(MonoInitializer, TheWaitingPairIsHandedOverUncheckedAtTheEnd) {
   const ForwardDrive drive;

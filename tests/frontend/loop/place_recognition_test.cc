@@ -334,6 +334,9 @@ TEST(PlaceRecognition, InvalidOptionsAreRejected) {
   o = PlaceRecognitionOptions();
   o.gate_rotation_deg = 0;
   EXPECT_FALSE(o.IsValid(&why));
+  o = PlaceRecognitionOptions();
+  o.gate_rotation_deg_per_m = -0.01;
+  EXPECT_FALSE(o.IsValid(&why));
 }
 
 TEST(KeyframeDatabase, AddFindAndOrder) {
