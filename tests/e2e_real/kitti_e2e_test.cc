@@ -23,7 +23,8 @@
 //   frames 0, 1 and 2, and from frame 0 at RANSAC draws 1 and 2: the map starts by frame 2 of
 //   each (its first pair checked by the next frame; without matching free of the rotation-only
 //   prediction while the map does not exist: frames 4, 10 and 14), every frame has a pose, no
-//   frame is lost; worst Sim(3) ATE 0.0709 m over ~55 m (offset 0, draw 0), bound 1.5x.
+//   frame is lost; best recorded worst Sim(3) ATE 0.0556 m over ~55 m (before the next-frame
+//   check; now 0.0709 m, from frame 0 at draw 0), bound 1.5x.
 // The path (60 m) is shorter than KITTI's shortest segment (100 m): no segment errors here.
 #include <gtest/gtest.h>
 
@@ -227,7 +228,7 @@ TEST(KittiMonoE2e, FastForwardMotionStartsWithinTwoFrames) {
   }
   testing::ExpectWithinBound(
       "ba/mono KITTI 06 every third frame, worst of 3 offsets and 3 draws from frame 0, ATE",
-      worst_ate, 0.0709, "m");
+      worst_ate, 0.0556, "m");
 }
 
 // One camera from frame 4 at RANSAC draw 3: frame 4's tracks are gone before a pair with it
