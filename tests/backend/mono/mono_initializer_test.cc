@@ -120,6 +120,15 @@ TEST(MonoInitializer, AFrameBetweenThatDoesNotInitialiseNowIsNotKept) {
   EXPECT_NE(init.reason().find("frame 2 is the new reference"), std::string::npos) << init.reason();
 }
 
+// m with its points' pixels shuffled among them: each landmark seen where another one is.
+FrameMeasurement Scrambled(FrameMeasurement m) {
+  std::vector<Eigen::Vector2d> uv;
+  for (const FeatureObservation& o : m.observations) uv.push_back(o.uv);
+  std::shuffle(uv.begin(), uv.end(), std::mt19937(3));
+  for (size_t i = 0; i < uv.size(); ++i) m.observations[i].uv = uv[i];
+  return m;
+}
+
 MonoInitializerOptions Checked() {
   MonoInitializerOptions o;
   o.next_frame_min_inlier_ratio = 0.5;
@@ -155,11 +164,7 @@ TEST(MonoInitializer, ADroppedPairKeepsItsReference) {
   EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{0, 300}})));
   EXPECT_NE(init.reason().find("checking the pair of frames 0 and 2"), std::string::npos)
       << init.reason();
-  FrameMeasurement scrambled = drive.Frame(3, 1.9, {{0, 300}});
-  std::vector<Eigen::Vector2d> uv;
-  for (const FeatureObservation& o : scrambled.observations) uv.push_back(o.uv);
-  std::shuffle(uv.begin(), uv.end(), std::mt19937(4));
-  for (size_t i = 0; i < uv.size(); ++i) scrambled.observations[i].uv = uv[i];
+  const FrameMeasurement scrambled = Scrambled(drive.Frame(3, 1.9, {{0, 300}}));
   EXPECT_FALSE(init.Add(scrambled));
   EXPECT_NE(init.reason().find("the pair of frames 0 and 2 failed the next frame's check"),
             std::string::npos)
@@ -196,11 +201,7 @@ TEST(MonoInitializer, APairTheNextFrameContradictsIsDropped) {
   AddTheWeakPair(drive, &init);
   EXPECT_FALSE(init.Add(drive.Frame(2, 1.5, {{50, 80}, {200, 350}, {400, 600}})));
   // Frame 3 sees the pair's points, but each where another one is: no motion explains them.
-  FrameMeasurement scrambled = drive.Frame(3, 1.9, {{200, 350}, {400, 600}});
-  std::vector<Eigen::Vector2d> uv;
-  for (const FeatureObservation& o : scrambled.observations) uv.push_back(o.uv);
-  std::shuffle(uv.begin(), uv.end(), std::mt19937(3));
-  for (size_t i = 0; i < uv.size(); ++i) scrambled.observations[i].uv = uv[i];
+  const FrameMeasurement scrambled = Scrambled(drive.Frame(3, 1.9, {{200, 350}, {400, 600}}));
   EXPECT_FALSE(init.Add(scrambled));
   EXPECT_NE(init.reason().find("the pair of frames 1 and 2 failed the next frame's check"),
             std::string::npos)
