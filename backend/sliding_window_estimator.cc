@@ -6,13 +6,10 @@
 #include <cmath>
 #include <functional>
 #include <iomanip>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
 #include <sstream>
 
 #include "backend/mono/keyframe_bridge.h"
 #include "core/cv_pose.h"
-#include "core/ransac_order.h"
 
 namespace dala {
 
@@ -232,40 +229,33 @@ std::optional<Pose> SlidingWindowEstimator::RecoverPose(const FrameMeasurement& 
 std::optional<Pose> SlidingWindowEstimator::PnpPose(const FrameMeasurement& m,
                                                     const std::function<bool(LandmarkId)>& use,
                                                     int min_inliers) const {
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
+  std::vector<Eigen::Vector3d> object;
+  std::vector<Eigen::Vector2d> image;
   std::vector<BaObservation> observations;
   for (const FeatureObservation& o : m.observations) {
     if (!use(o.landmark)) continue;
     const std::optional<Eigen::Vector3d> p_w = ba_.LandmarkPosition(o.landmark);
     if (!p_w) continue;
-    object.emplace_back(p_w->x(), p_w->y(), p_w->z());
-    image.emplace_back(o.uv.x(), o.uv.y());
+    object.push_back(*p_w);
+    image.push_back(o.uv);
     observations.push_back(AsFrameObservation(o));
   }
   if (static_cast<int>(object.size()) < min_inliers) return std::nullopt;
-  cv::Mat K;
-  cv::eigen2cv(rig_.left.K(), K);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  // The correspondences in the order that seeds OpenCV's draws (core/ransac_order.h); only the
-  // number of inliers is used below.
-  const std::vector<int> order = RansacOrder(object.size(), options_.ransac_order_seed);
   // Threshold: the chi-square 95 % bound of a 1-pixel observation (2 dof), as the BA's test.
-  const bool found = cv::solvePnPRansac(
-      Reordered(object, order), Reordered(image, order), K, cv::noArray(), rvec, tvec, false, 200,
-      std::sqrt(kChi2Quantile95Dof2), 0.999, inliers, cv::SOLVEPNP_EPNP);
-  if (!found || static_cast<int>(inliers.size()) < min_inliers) {
-    VLOG(1) << "frame " << m.frame << ": PnP failed (" << inliers.size() << " inliers of "
+  const PnpRansacResult pnp = SeededPnpRansac(object, image, rig_.left.K(),
+                                              std::sqrt(kChi2Quantile95Dof2),
+                                              options_.ransac_order_seed);
+  if (!pnp.found || pnp.inliers < min_inliers) {
+    VLOG(1) << "frame " << m.frame << ": PnP failed (" << pnp.inliers << " inliers of "
             << object.size() << ")";
     return std::nullopt;
   }
-  const Pose guess = PoseFromRvecTvec(rvec, tvec).inverse();  // OpenCV gives T_c_w.
+  const Pose guess = pnp.T_c_o.inverse();  // T_w_c from OpenCV's T_c_w.
   // Refined over the same landmarks, outliers rejected.
   const PoseOnlyResult r = EstimatePoseOnly(
       IntrinsicsOf(rig_, ba_.disparity_offset_px()), observations,
       [&](LandmarkId id) { return ba_.LandmarkPosition(id); }, guess, options_.pose_only);
-  VLOG(1) << "frame " << m.frame << ": PnP " << inliers.size() << " inliers of " << object.size()
+  VLOG(1) << "frame " << m.frame << ": PnP " << pnp.inliers << " inliers of " << object.size()
           << ", pose-only " << PoseOnlyStatusName(r.status) << " (" << r.num_inliers << " inliers)";
   if (r.status != PoseOnlyStatus::kOk || r.num_inliers < min_inliers) return std::nullopt;
   return r.T_w_c;

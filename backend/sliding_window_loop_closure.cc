@@ -63,15 +63,17 @@ bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur
     e.information = info.Odometry(e.T_from_to);
     edges.push_back(e);
   }
-  // How far the loop moves the current keyframe from the dead reckoning: T_dr^-1 T_loop (both
-  // T_old_cur), in the dead-reckoned current camera's frame.
-  const Pose T_old_cur_dr = T_w_kf.at(old->second).inverse() * *T_w_c;
-  const Pose correction = T_old_cur_dr.inverse() * loop.T_old_cur;
-  VLOG(1) << "loop to frame " << loop.old_frame << ": measured "
-          << loop.T_old_cur.translation().norm() << " m apart, dead reckoning "
-          << T_old_cur_dr.translation().norm() << " m; the loop moves it "
-          << correction.translation().norm() << " m and "
-          << Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI << " deg";
+  if (VLOG_IS_ON(1)) {
+    // How far the loop moves the current keyframe from the dead reckoning: T_dr^-1 T_loop
+    // (both T_old_cur), in the dead-reckoned current camera's frame.
+    const Pose T_old_cur_dr = T_w_kf.at(old->second).inverse() * *T_w_c;
+    const Pose correction = T_old_cur_dr.inverse() * loop.T_old_cur;
+    VLOG(1) << "loop to frame " << loop.old_frame << ": measured "
+            << loop.T_old_cur.translation().norm() << " m apart, dead reckoning "
+            << T_old_cur_dr.translation().norm() << " m; the loop moves it "
+            << correction.translation().norm() << " m and "
+            << Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI << " deg";
+  }
   PoseGraphEdge loop_edge;
   loop_edge.from = old->second;
   loop_edge.to = cur_id;

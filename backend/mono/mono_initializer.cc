@@ -7,12 +7,9 @@
 #include <sstream>
 #include <unordered_map>
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
-
 #include "backend/ba/ba_types.h"
 #include "backend/mono/refined_two_view.h"
-#include "core/ransac_order.h"
+#include "core/cv_pose.h"
 
 namespace dala {
 
@@ -117,29 +114,25 @@ constexpr int kMinObservedToCheck = 6;
 
 double MonoInitializer::NextFrameInlierRatio(const MonoInitialization& pair,
                                              const FrameMeasurement& m, int* observed) const {
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
+  std::vector<Eigen::Vector3d> p_ref;
+  std::vector<Eigen::Vector2d> uv;
   for (const FeatureObservation& o : m.observations) {
     const auto it = pair.p_ref.find(o.landmark);
     if (it == pair.p_ref.end()) continue;
-    object.emplace_back(it->second.x(), it->second.y(), it->second.z());
-    image.emplace_back(o.uv.x(), o.uv.y());
+    p_ref.push_back(it->second);
+    uv.push_back(o.uv);
   }
-  *observed = static_cast<int>(object.size());
+  *observed = static_cast<int>(p_ref.size());
   if (*observed < kMinObservedToCheck) return 0.0;
-  cv::Mat K;
-  cv::eigen2cv(camera_.K(), K);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  const std::vector<int> order = RansacOrder(object.size(), options_.two_view.ransac_order_seed);
   // The chi-square 95 % bound of a 1-pixel observation (2 dof), as the window's tracking.
-  const bool found = cv::solvePnPRansac(
-      Reordered(object, order), Reordered(image, order), K, cv::noArray(), rvec, tvec, false, 200,
-      std::sqrt(kChi2Quantile95Dof2), 0.999, inliers, cv::SOLVEPNP_EPNP);
-  return found ? static_cast<double>(inliers.size()) / *observed : 0.0;
+  const PnpRansacResult pnp = SeededPnpRansac(p_ref, uv, camera_.K(),
+                                              std::sqrt(kChi2Quantile95Dof2),
+                                              options_.two_view.ransac_order_seed);
+  return pnp.found ? static_cast<double>(pnp.inliers) / *observed : 0.0;
 }
 
 std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m) {
+  std::string dropped;  // Why a waiting pair was dropped at m, if one was.
   if (pair_) {
     int observed = 0;
     const double ratio = NextFrameInlierRatio(*pair_, m, &observed);
@@ -162,30 +155,24 @@ std::optional<MonoInitialization> MonoInitializer::Add(const FrameMeasurement& m
     why << "the pair of frames " << pair_->reference.frame << " and " << pair_->current.frame
         << " failed the next frame's check (" << ratio << " of " << observed
         << " points kept; ";
-    MonoInitialization& dropped = *pair_;
-    reference_ = std::move(dropped.reference);
-    between_ = std::move(dropped.between);
-    between_.push_back(std::move(dropped.current));
-    earlier_.assign(std::make_move_iterator(dropped.earlier.begin()),
-                    std::make_move_iterator(dropped.earlier.end()));
+    dropped = why.str();
+    MonoInitialization& pair = *pair_;
+    reference_ = std::move(pair.reference);
+    between_ = std::move(pair.between);
+    between_.push_back(std::move(pair.current));
+    earlier_.assign(std::make_move_iterator(pair.earlier.begin()),
+                    std::make_move_iterator(pair.earlier.end()));
     pair_.reset();
-    std::optional<MonoInitialization> found = FindPair(m);
-    if (found) {
-      pair_ = std::move(found);
-      reason_ = why.str() + "checking the pair of frames " +
-                std::to_string(pair_->reference.frame.value) + " and " +
-                std::to_string(m.frame.value) + " against the next frame)";
-      return std::nullopt;
-    }
-    reason_ = why.str() + reason_ + ")";
-    return std::nullopt;
   }
   std::optional<MonoInitialization> found = FindPair(m);
-  if (!found || options_.next_frame_min_inlier_ratio <= 0.0) return found;
-  pair_ = std::move(found);
-  reason_ = "checking the pair of frames " + std::to_string(pair_->reference.frame.value) +
-            " and " + std::to_string(m.frame.value) + " against the next frame";
-  return std::nullopt;
+  if (found && options_.next_frame_min_inlier_ratio > 0.0) {
+    pair_ = std::move(found);
+    found.reset();  // It waits for the next frame.
+    reason_ = "checking the pair of frames " + std::to_string(pair_->reference.frame.value) +
+              " and " + std::to_string(m.frame.value) + " against the next frame";
+  }
+  if (!dropped.empty()) reason_ = dropped + reason_ + ")";
+  return found;
 }
 
 std::optional<MonoInitialization> MonoInitializer::TakeWaitingPair() {
