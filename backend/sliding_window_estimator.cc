@@ -31,6 +31,10 @@ bool BaLoopClosureOptions::IsValid(std::string* why) const {
     if (why) *why = "ba.loop_mono_scale_sigma and ba.loop_mono_loop_scale_sigma must be > 0";
     return false;
   }
+  if (!(mono_max_turn_deg > 0 && mono_max_turn_deg_per_unit >= 0)) {
+    if (why) *why = "the mono loop's turn gate must be > 0 deg (its per-unit term >= 0)";
+    return false;
+  }
   return sim3.IsValid(why);
 }
 

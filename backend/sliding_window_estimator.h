@@ -118,6 +118,7 @@
 #include "backend/ba/sliding_window_ba.h"
 #include "backend/estimator.h"
 #include "backend/mono/loop_sim3.h"
+#include "backend/mono/loop_turn_gate.h"
 #include "backend/mono/mono_initializer.h"
 #include "core/camera.h"
 #include "frontend/worker_thread.h"
@@ -161,6 +162,15 @@ struct BaLoopClosureOptions {
   int mono_pnp_min_inliers = 8;
   double mono_pnp_scale_sigma = 1.0;
   LoopSim3Options sim3;
+  // One camera: the loop may turn the current keyframe by at most mono_max_turn_deg +
+  // mono_max_turn_deg_per_unit x (the keyframe path since the old keyframe, in the map's unit)
+  // from its tracked pose; a loop to a look-alike place seen from another street turns it by
+  // tens of degrees. System sets these from loop.gate_rotation_deg and
+  // loop.gate_rotation_deg_per_m (the stereo rig's gate, frontend/place_recognition.h), and
+  // switches the gate off with loop.spatial_gate.
+  bool mono_turn_gate = true;
+  double mono_max_turn_deg = 10.0;
+  double mono_max_turn_deg_per_unit = 0.01;
 
   bool IsValid(std::string* why) const;
 };
@@ -329,7 +339,13 @@ class SlidingWindowEstimator : public Estimator {
   // the loop edge places the keyframe by PnP of m on the old landmarks (else by the similarity)
   // with the scale of the recognised landmarks' two estimates (else left to the graph). Frames
   // between keyframes are rescaled with their keyframe; the previous frame's pose follows.
+  // Refused (false) when the loop would turn the camera beyond the gate (MonoLoopTurn).
   bool CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id, Pose* T_w_c);
+  // One camera: how far a loop that puts the current keyframe (tracked at T_w_c) at T_w_c_loop
+  // turns it, and whether that is within the gate (BaLoopClosureOptions::mono_max_turn_deg;
+  // always within with the gate off); logs a refusal.
+  LoopTurn MonoLoopTurn(KeyframeId old, const Pose& T_w_c, const Pose& T_w_c_loop,
+                        FrameId old_frame) const;
   // A new, empty window (no marginalisation prior); every landmark keeps its last position
   // (PnP recovery, loop closure and the next keyframes use them), the disparity offset its
   // estimate; the last keyframe's observations are forgotten (it left with the window).

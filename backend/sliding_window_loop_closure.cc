@@ -6,6 +6,7 @@
 #include <string>
 
 #include "backend/mono/loop_sim3.h"
+#include "backend/mono/loop_turn_gate.h"
 #include "backend/sliding_window_estimator.h"
 
 namespace dala {
@@ -108,6 +109,20 @@ bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur
   return true;
 }
 
+LoopTurn SlidingWindowEstimator::MonoLoopTurn(KeyframeId old, const Pose& T_w_c,
+                                              const Pose& T_w_c_loop, FrameId old_frame) const {
+  const double path = KeyframePathFrom(keyframe_poses_, old, T_w_c.translation());
+  LoopTurn turn = CheckLoopTurn(T_w_c, T_w_c_loop, path, options_.loop.mono_max_turn_deg,
+                                options_.loop.mono_max_turn_deg_per_unit);
+  if (!options_.loop.mono_turn_gate) turn.within = true;
+  if (!turn.within) {
+    VLOG(1) << "loop to frame " << old_frame << ": it would turn the camera by " << turn.turn_deg
+            << " deg, more than the gate's " << turn.max_deg << " deg after " << path
+            << " map units: ignored";
+  }
+  return turn;
+}
+
 bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id,
                                            Pose* T_w_c) {
   const LoopDetection& loop = *m.loop;
@@ -142,6 +157,8 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   }
   Sim3 S_w_cur_in_old = sim3 ? sim3->S_old_cur * Sim3{*T_w_c, 1.0} : Sim3{*T_w_cur_old, 1.0};
   if (T_w_cur_old) S_w_cur_in_old.T = *T_w_cur_old;
+  const LoopTurn turn = MonoLoopTurn(old->second, *T_w_c, S_w_cur_in_old.T, loop.old_frame);
+  if (!turn.within) return false;
   const double loop_scale_sigma =
       sim3 ? options_.loop.mono_loop_scale_sigma : options_.loop.mono_pnp_scale_sigma;
   // Nodes at the current estimates, scale 1 (the map's unit everywhere).
@@ -179,7 +196,8 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
           << (T_w_cur_old ? "PnP on the old landmarks" : "the similarity")
           << (sim3 ? ", scale from " + std::to_string(sim3->inliers) + " landmarks"
                    : std::string(", scale free"))
-          << ", pose graph cost " << summary.initial_cost << " -> " << summary.final_cost
+          << ", turning the camera by " << turn.turn_deg << " deg (gate " << turn.max_deg
+          << "), pose graph cost " << summary.initial_cost << " -> " << summary.final_cost
           << ", current scale " << corrected.at(cur_id).scale;
   // Every keyframe k's unit becomes the world's again: its camera coordinates grow by s_k
   // (p_k' = s_k p_k), so a stored loop edge a -> b is re-expressed as

@@ -62,6 +62,11 @@ System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), 
   options_.frontend.motion.ransac_order_seed = order_seed;
   options_.ba.mono_init.two_view.ransac_order_seed = order_seed;
   options_.ba.ransac_order_seed = order_seed;
+  // One orientation gate for loops: the stereo rig's in the place recognition, one camera's in
+  // the estimator's Sim(3) loop closure (BaLoopClosureOptions::mono_max_turn_deg).
+  options_.ba.loop.mono_turn_gate = options_.frontend.loop.spatial_gate;
+  options_.ba.loop.mono_max_turn_deg = options_.frontend.loop.gate_rotation_deg;
+  options_.ba.loop.mono_max_turn_deg_per_unit = options_.frontend.loop.gate_rotation_deg_per_m;
   estimator_ = MakeEstimator(rig_, options_);
   frontend_ = std::make_unique<Frontend>(rig_, options_.frontend);
 }

@@ -90,6 +90,8 @@ struct PlaceRecognitionOptions {
   // odometry drifts in heading by thousandths of a degree per metre (KITTI's best: ~0.003);
   // a PnP on a repeated facade seen from elsewhere can put the camera anywhere, facing anywhere
   // (on a rendered 1.26 km drive, a false loop turned it by 176 deg within the position gate).
+  // One camera: the estimator applies the same bound to the loop's pose, the path in the map's
+  // unit (System copies both into BaLoopClosureOptions::mono_max_turn_deg*).
   double gate_rotation_deg = 10.0;
   double gate_rotation_deg_per_m = 0.01;
   // Verification: matcher (no prior) and PnP (RANSAC + refinement, seeded).
