@@ -32,7 +32,10 @@ bool BaLoopClosureOptions::IsValid(std::string* why) const {
     return false;
   }
   if (!(mono_max_turn_deg > 0 && mono_max_turn_deg_per_unit >= 0)) {
-    if (why) *why = "the mono loop's turn gate must be > 0 deg (its per-unit term >= 0)";
+    if (why) {
+      *why = "the mono loop's turn gate (loop.gate_rotation_deg) must be > 0 and its per-unit "
+             "term (loop.gate_rotation_deg_per_m) >= 0";
+    }
     return false;
   }
   return sim3.IsValid(why);
