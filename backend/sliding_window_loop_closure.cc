@@ -112,8 +112,9 @@ bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur
 LoopTurn SlidingWindowEstimator::MonoLoopTurn(KeyframeId old, const Pose& T_w_c,
                                               const Pose& T_w_c_loop, FrameId old_frame) const {
   const double path = KeyframePathFrom(keyframe_poses_, old, T_w_c.translation());
-  LoopTurn turn = CheckLoopTurn(T_w_c, T_w_c_loop, path, options_.loop.mono_max_turn_deg,
-                                options_.loop.mono_max_turn_deg_per_unit);
+  LoopTurn turn =
+      CheckLoopTurn(T_w_c.rotation(), T_w_c_loop.rotation(), path,
+                    options_.loop.mono_max_turn_deg, options_.loop.mono_max_turn_deg_per_unit);
   if (!options_.loop.mono_turn_gate) turn.within = true;
   if (!turn.within) {
     VLOG(1) << "loop to frame " << old_frame << ": it would turn the camera by " << turn.turn_deg

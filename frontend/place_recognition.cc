@@ -9,6 +9,8 @@
 #include <opencv2/imgproc.hpp>
 #include <unordered_set>
 
+#include "core/loop_turn.h"
+
 namespace dala {
 
 MotionEstimatorOptions PlaceRecognitionOptions::DefaultPnpOptions() {
@@ -165,10 +167,10 @@ bool PlaceRecognition::WithinRotationGate(const KeyframeEntry& old, const Keyfra
                                           const Eigen::Matrix3d& R_w_cur) const {
   if (!options_.spatial_gate || !rig_.is_stereo()) return true;
   const double path = std::abs(query.path_length_m - old.path_length_m);
-  const double max_deg = options_.gate_rotation_deg + options_.gate_rotation_deg_per_m * path;
-  // The angle of R_w_dr^T R_w_cur: how far the loop would turn the dead-reckoned camera.
-  const Eigen::AngleAxisd turn(query.T_w_c.rotation().transpose() * R_w_cur);
-  return turn.angle() * 180.0 / M_PI <= max_deg;
+  // How far the loop would turn the dead-reckoned camera.
+  return CheckLoopTurn(query.T_w_c.rotation(), R_w_cur, path, options_.gate_rotation_deg,
+                       options_.gate_rotation_deg_per_m)
+      .within;
 }
 
 bool PlaceRecognition::LeftAndCameBack(const KeyframeEntry& old,

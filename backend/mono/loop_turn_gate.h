@@ -9,25 +9,16 @@
 // look-alike place seen from another street turns it by tens of degrees (rendered KITTI 00,
 // 1,700 frames: 93 deg, where the right loops turn by under a degree). The gate is the stereo
 // rig's (frontend/place_recognition.h, loop.gate_rotation_deg and loop.gate_rotation_deg_per_m)
-// with the path in the map's unit, as one camera has no metre:
-//   turn = angle(R_w_c^T R_w_c_loop) <= max_deg + max_deg_per_unit * path.
+// with the path in the map's unit, as one camera has no metre: CheckLoopTurn (core/loop_turn.h)
+// with the keyframe path below.
 
 #include <map>
 
 #include "core/geometry.h"
+#include "core/loop_turn.h"
 #include "core/types.h"
 
 namespace dala {
-
-struct LoopTurn {
-  double turn_deg = 0.0;  // How far the loop would turn the camera.
-  double max_deg = 0.0;   // The gate after this path.
-  bool within = false;
-};
-
-// T_w_c: the camera as tracked; T_w_c_loop: where the loop puts it; path: since the old keyframe.
-LoopTurn CheckLoopTurn(const Pose& T_w_c, const Pose& T_w_c_loop, double path, double max_deg,
-                       double max_deg_per_unit);
 
 // The length of the keyframe path from keyframe `from` through every later keyframe (in id
 // order) to the current camera centre c_w (map units); 0 when `from` is not among them.

@@ -1,4 +1,5 @@
-// One camera's loop gate on the turn a loop would make (backend/mono/loop_turn_gate.h).
+// The loop gate on the turn a loop would make (core/loop_turn.h, which the stereo rig's place
+// recognition shares) and one camera's keyframe path (backend/mono/loop_turn_gate.h).
 #include "backend/mono/loop_turn_gate.h"
 
 #include <gtest/gtest.h>
@@ -26,7 +27,7 @@ TEST(LoopTurnGate, MeasuresTheTurnAboutAnyAxisAndNotTheMove) {
   // The loop moves the camera by 20 m and turns it by 7 deg about another axis.
   Pose T_loop = Turned(T_w_c, 7.0, Eigen::Vector3d(1, 0.5, -0.4));
   T_loop.translation() += Eigen::Vector3d(20, 0, 0);
-  const LoopTurn t = CheckLoopTurn(T_w_c, T_loop, /*path=*/0.0, 10.0, 0.01);
+  const LoopTurn t = CheckLoopTurn(T_w_c.rotation(), T_loop.rotation(), /*path=*/0.0, 10.0, 0.01);
   EXPECT_NEAR(t.turn_deg, 7.0, 1e-9);
   EXPECT_DOUBLE_EQ(t.max_deg, 10.0);
   EXPECT_TRUE(t.within);
@@ -37,7 +38,8 @@ TEST(LoopTurnGate, RefusesALookAlikePlaceSeenFromAnotherStreet) {
   // 93 deg after 609 map units of path; the gate there is 10 + 0.01 x 609 = 16.1 deg.
   const Pose T_w_c = At(5, 0, 7);
   const LoopTurn t =
-      CheckLoopTurn(T_w_c, Turned(T_w_c, 93.0, Eigen::Vector3d::UnitY()), 609.0, 10.0, 0.01);
+      CheckLoopTurn(T_w_c.rotation(), Turned(T_w_c, 93.0, Eigen::Vector3d::UnitY()).rotation(),
+                    609.0, 10.0, 0.01);
   EXPECT_NEAR(t.max_deg, 16.09, 1e-9);
   EXPECT_FALSE(t.within);
 }
@@ -45,8 +47,9 @@ TEST(LoopTurnGate, RefusesALookAlikePlaceSeenFromAnotherStreet) {
 TEST(LoopTurnGate, WidensWithThePathSinceTheOldKeyframe) {
   const Pose T_w_c = At(0, 0, 0);
   const Pose T_loop = Turned(T_w_c, 30.0, Eigen::Vector3d::UnitY());
-  EXPECT_FALSE(CheckLoopTurn(T_w_c, T_loop, 1000.0, 10.0, 0.01).within);  // 20 deg.
-  EXPECT_TRUE(CheckLoopTurn(T_w_c, T_loop, 2500.0, 10.0, 0.01).within);   // 35 deg.
+  const Eigen::Matrix3d R = T_w_c.rotation(), R_loop = T_loop.rotation();
+  EXPECT_FALSE(CheckLoopTurn(R, R_loop, 1000.0, 10.0, 0.01).within);  // 20 deg.
+  EXPECT_TRUE(CheckLoopTurn(R, R_loop, 2500.0, 10.0, 0.01).within);   // 35 deg.
 }
 
 TEST(LoopTurnGate, PathRunsFromTheOldKeyframeThroughTheLaterOnesToTheCamera) {
