@@ -51,6 +51,10 @@ struct EstimatorOutput {
   // disparity_offset_px: calibrated or estimated online); nullopt: the estimator has none.
   std::optional<double> disparity_offset_px;
   bool loop_closed = false;    // A loop closure corrected the trajectory at this frame.
+  // The frame's loop detection was not closed and the observations the frontend relabelled with
+  // the old landmarks' ids are left unused (one camera: the gate refused the loop, or nothing
+  // verified it); the frontend gives the points their ids back (Frontend::ReturnLoopIds).
+  bool loop_refused = false;
 };
 
 // What Estimator::Refine did.

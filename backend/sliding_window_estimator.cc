@@ -780,11 +780,19 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   // One camera: the loop closes from the tracked pose (the similarity moves it).
   if (!stereo && out.valid && m.is_keyframe && m.loop && options_.loop.enable) {
     out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c);
-    // The frontend gave the recognised points their old ids; unconfirmed in 3D, the old
-    // landmarks' estimates would be outliers of the drifted neighbourhood: never used.
-    if (!out.loop_closed) {
-      for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.insert(ids.second);
+    // The frontend gave the recognised points their old ids. Unless the loop closes, the old
+    // landmarks' estimates are outliers of the drifted neighbourhood: this frame does not use
+    // them, and the frontend gives the points their ids back (loop_refused), so that the next
+    // frames observe the current landmarks again. A loop that closes confirms the old
+    // landmarks, also those an earlier refused loop had relabelled.
+    for (const auto& ids : m.loop->relabelled) {
+      if (out.loop_closed) {
+        unconfirmed_loop_landmarks_.erase(ids.second);
+      } else {
+        unconfirmed_loop_landmarks_.insert(ids.second);
+      }
     }
+    out.loop_refused = !out.loop_closed;
   }
   // A mono keyframe needs a tracked pose (see the class comment).
   const bool new_keyframe = first || (m.is_keyframe && (stereo || out.valid));

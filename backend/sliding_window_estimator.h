@@ -435,7 +435,8 @@ class SlidingWindowEstimator : public Estimator {
   std::vector<std::pair<KeyframeId, KeyframeId>> unit_pairs_;  // Mono: (first, second) per map.
   int added_since_window_start_ = 0;
   std::vector<Sim3Edge> mono_loop_edges_;  // One camera: the same, in the current units.
-  // One camera: old landmarks a loop that was not closed relabelled (see Add).
+  // One camera: old landmarks a loop that was not closed relabelled, unused until a loop to
+  // them closes (see Add).
   std::set<LandmarkId> unconfirmed_loop_landmarks_;
   // Landmark fusion: each merged id -> the id that survived it (see RenameFused), and back.
   std::map<LandmarkId, LandmarkId> fused_into_;

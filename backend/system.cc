@@ -109,6 +109,7 @@ TrackResult System::Track(const Frame& frame) {
     local_map_handed_ = true;
     frontend_->SetLocalMap({frame.id, e.T_w_c, e.valid, std::move(e.local_map)});
   }
+  if (m.loop && e.loop_refused) frontend_->ReturnLoopIds(*m.loop);
   const auto t2 = Clock::now();
 
   FrameStats s;

@@ -416,6 +416,26 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
   return match->loop;
 }
 
+void Frontend::ReturnLoopIds(const LoopDetection& loop) {
+  if (!prev_ || loop.relabelled.empty()) return;
+  std::unordered_map<LandmarkId, LandmarkId> before;  // Old id -> the id before the loop.
+  for (const auto& [cur, old] : loop.relabelled) before[old] = cur;
+  const FrameId frame = prev_->id;
+  const auto give_back = [&](TrackedFrame* f) {
+    if (!f || f->id != frame) return;
+    for (LandmarkId& id : f->landmark) {
+      const auto it = before.find(id);
+      if (it != before.end()) id = it->second;
+    }
+  };
+  give_back(&*prev_);
+  give_back(keyframe_ ? &*keyframe_ : nullptr);
+  give_back(tracked_keyframe_ ? &*tracked_keyframe_ : nullptr);
+  place_recognition_.mutable_database()->RenameLandmarks(frame, before);
+  VLOG(1) << "frame " << frame << ": the loop to frame " << loop.old_frame << " was not closed; "
+          << before.size() << " points take back their ids";
+}
+
 void CheckFrameSuitsRig(const Frame& frame, const StereoRig& rig) {
   const auto check = [&](const cv::Mat& image, const char* which) {
     if (image.empty()) {

@@ -112,6 +112,12 @@ class Frontend {
   // every frame is relocalised against the database until the estimator reports one tracked
   // (SetLocalMap). The map must suit the options (System::UseMap checks it).
   void UseMap(const SavedMap& map);
+  // The estimator left the observations a loop relabelled unused (it did not close the loop:
+  // EstimatorOutput::loop_refused): the frame just processed gives those points back the ids
+  // they had before the loop, in what the next frames track from and in its place-recognition
+  // entry, so that their tracks go on in the current map instead of ending in old ids the
+  // estimator ignores. Call it after Process, before the next frame.
+  void ReturnLoopIds(const LoopDetection& loop);
   // The keyframe database and the last search's statistics.
   const PlaceRecognition& place_recognition() const { return place_recognition_; }
   PlaceRecognition* mutable_place_recognition() { return &place_recognition_; }

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -71,6 +72,9 @@ class KeyframeDatabase {
   const KeyframeEntry* Find(FrameId frame) const;
   // The position of `frame`'s entry in entries(), or nullopt.
   std::optional<size_t> IndexOf(FrameId frame) const;
+  // Gives the points of `frame`'s entry other landmark ids (`new_id`: id now -> id then); false
+  // when `frame` has no entry.
+  bool RenameLandmarks(FrameId frame, const std::unordered_map<LandmarkId, LandmarkId>& new_id);
   void Clear() { entries_.clear(); }
 
  private:

@@ -216,12 +216,15 @@ TEST(LoopClosureE2e, OneCamerasLoopsMeetTheOrientationGate) {
   std::cout << "[ measured ] mono small_loop 5 Hz " << seq.size() << " frames: loops closed "
             << run.loops_closed << " of " << run.loops_detected << ", Sim(3) ATE "
             << run.eval.ate.translation.rmse << " m; gate 1e-6 deg: closed " << gated.loops_closed
-            << " of " << gated.loops_detected << ", Sim(3) ATE "
-            << gated.eval.ate.translation.rmse << " m" << std::endl;
+            << " of " << gated.loops_detected << ", Sim(3) ATE " << gated.eval.ate.translation.rmse
+            << " m, " << gated.lost << " frames lost" << std::endl;
   EXPECT_GE(run.loops_closed, 1);
   EXPECT_EQ(run.loops_closed, run.loops_detected);
   EXPECT_GE(gated.loops_detected, 1);
   EXPECT_EQ(gated.loops_closed, 0);
+  // A refused loop's points take back their ids (Frontend::ReturnLoopIds): their tracks go on
+  // in the current map, and no frame is lost for the refusal.
+  EXPECT_EQ(gated.lost, 0);
   EXPECT_LT(run.eval.ate.translation.rmse, gated.eval.ate.translation.rmse);
   SetSystemOption("loop.spatial_gate=false", &options);
   const LoopRun ungated = RunSystem(seq, options, AlignmentType::kSim3);

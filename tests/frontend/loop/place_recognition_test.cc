@@ -6,6 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <unordered_map>
+#include <vector>
+
 #include <opencv2/imgproc.hpp>
 
 #include "core/sim/synthetic_sequence.h"
@@ -356,6 +359,32 @@ TEST(KeyframeDatabase, AddFindAndOrder) {
   e.frame = FrameId(9);
   e.landmark.push_back(LandmarkId(1));  // One id, no point.
   EXPECT_DEATH(db.Add(e), "one point per landmark");
+}
+
+// A refused loop's points take back their ids (Frontend::ReturnLoopIds) in the keyframe's entry.
+TEST(KeyframeDatabase, RenameLandmarksRenamesOneEntry) {
+  KeyframeDatabase db;
+  KeyframeEntry e;
+  e.descriptors = QuantizedDescriptors(2);
+  const std::vector<float> row = {0.5f, -0.5f};
+  for (const int id : {10, 11, 12}) {
+    e.points.emplace_back();
+    e.descriptors.Append(row.data());
+    e.landmark.push_back(LandmarkId(id));
+    e.stereo.emplace_back();
+  }
+  e.frame = FrameId(3);
+  db.Add(e);
+  e.frame = FrameId(7);
+  db.Add(e);
+  const std::unordered_map<LandmarkId, LandmarkId> before = {{LandmarkId(11), LandmarkId(40)},
+                                                              {LandmarkId(12), LandmarkId()}};
+  EXPECT_TRUE(db.RenameLandmarks(FrameId(7), before));
+  EXPECT_FALSE(db.RenameLandmarks(FrameId(5), before));
+  EXPECT_EQ(db.Find(FrameId(7))->landmark,
+            (std::vector<LandmarkId>{LandmarkId(10), LandmarkId(40), LandmarkId()}));
+  EXPECT_EQ(db.Find(FrameId(3))->landmark,
+            (std::vector<LandmarkId>{LandmarkId(10), LandmarkId(11), LandmarkId(12)}));
 }
 
 }  // namespace
