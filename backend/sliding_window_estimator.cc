@@ -289,10 +289,17 @@ std::optional<Pose> SlidingWindowEstimator::BridgeFromLastKeyframe(const FrameMe
   const int64_t t_kf = frames_.at(first_frame_of_keyframe_.at(last_keyframe_)).t_ns;
   const double distance =
       last_tracked_->velocity_w.norm() * 1e-9 * static_cast<double>(m.t_ns - t_kf);
+  // Over the frame's own tracks: not the observations a loop relabelled (see Add).
+  FrameMeasurement own = m;
+  own.observations.erase(std::remove_if(own.observations.begin(), own.observations.end(),
+                                        [&](const FeatureObservation& o) {
+                                          return unconfirmed_loop_landmarks_.count(o.landmark) > 0;
+                                        }),
+                         own.observations.end());
   std::string why;
   const std::optional<KeyframeBridge> bridge =
-      BridgeFromKeyframe(rig_.left, KeyframePoseNow(last_keyframe_), last_keyframe_observations_, m,
-                         distance, BridgeTwoViewOptions(), &why);
+      BridgeFromKeyframe(rig_.left, KeyframePoseNow(last_keyframe_), last_keyframe_observations_,
+                         own, distance, BridgeTwoViewOptions(), &why);
   if (!bridge) {
     std::ostringstream os;
     os << ", no bridge from keyframe " << last_keyframe_ << " (" << why << ")";
@@ -730,10 +737,19 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   const bool first = num_keyframes_ == 0;
   if (stereo && !first && m.motion) velocity_ = m.motion->T_prev_cur;
   Pose T_w_c = first ? T_w_start.value_or(Pose::Identity()) : PredictPose(m);
+  const Pose T_w_predicted = T_w_c;
   out.valid = first || (stereo && m.motion.has_value());
   if (T_w_start) out.note = "localised in the saved map";
 
   std::string why_lost;  // Filled as each way of placing the frame fails.
+  // One camera, a loop detected at this keyframe: the observations the frontend relabelled with
+  // the old landmarks' ids are the loop's to judge (CloseMonoLoop), not this frame's. Placed by
+  // them, the frame would already sit in the old neighbourhood, and the loop, right or wrong,
+  // would turn it by nothing (the orientation gate would measure nothing).
+  const bool mono_loop = !stereo && !first && m.is_keyframe && m.loop && options_.loop.enable;
+  if (mono_loop) {
+    for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.insert(ids.second);
+  }
   if (!first) {
     if (stereo && m.is_keyframe && m.loop && options_.loop.enable) {
       out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
@@ -777,14 +793,26 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   }
   // Why a frame has no pose (report.json's note); a later note (a new map starts) replaces it.
   if (!out.valid && !first && out.note.empty()) out.note = why_lost;
-  // One camera: the loop closes from the tracked pose (the similarity moves it).
-  if (!stereo && out.valid && m.is_keyframe && m.loop && options_.loop.enable) {
+  // One camera: the loop closes from the tracked pose (the similarity moves it). When only the
+  // loop's observations could place the frame, the loop is judged from the constant-velocity
+  // prediction instead (the gate measures the turn from it); closed, it places the frame.
+  if (mono_loop && out.valid) {
     out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c);
-    // The frontend gave the recognised points their old ids. Unless the loop closes, the old
-    // landmarks' estimates are outliers of the drifted neighbourhood: this frame does not use
-    // them, and the frontend gives the points their ids back (loop_refused), so that the next
-    // frames observe the current landmarks again. A loop that closes confirms the old
-    // landmarks, also those an earlier refused loop had relabelled.
+  } else if (mono_loop) {
+    Pose T_w_loop = T_w_predicted;
+    if (CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_loop)) {
+      T_w_c = T_w_loop;
+      out.valid = true;
+      out.loop_closed = true;
+      out.note = "placed by the loop closure to frame " + std::to_string(m.loop->old_frame.value) +
+                 " (the current map alone could not place it)";
+    }
+  }
+  if (mono_loop) {
+    // Unless the loop closes, the old landmarks' estimates are outliers of the drifted
+    // neighbourhood: this frame does not use them, and the frontend gives the points their ids
+    // back (loop_refused), so that the next frames observe the current landmarks again. A loop
+    // that closes confirms the old landmarks, also those an earlier refused loop had relabelled.
     for (const auto& ids : m.loop->relabelled) {
       if (out.loop_closed) {
         unconfirmed_loop_landmarks_.erase(ids.second);

@@ -169,8 +169,9 @@ struct BaLoopClosureOptions {
   // loop.gate_rotation_deg_per_m (the stereo rig's gate, frontend/place_recognition.h), and
   // switches the gate off with loop.spatial_gate. The map's unit is the first pair's baseline,
   // so the per-unit term stands for a different distance on each run (KITTI at 10 Hz: ~2 m).
-  // The turn is measured from the pose the frame was tracked at, which a recovery (PnP) may
-  // already have taken from the loop's own landmarks: such a loop passes.
+  // The turn is measured from the pose the current map gives the frame (the loop's relabelled
+  // observations do not place it), else from the constant-velocity prediction
+  // (SlidingWindowEstimator::Add).
   bool mono_turn_gate = true;
   double mono_max_turn_deg = 10.0;
   double mono_max_turn_deg_per_unit = 0.01;

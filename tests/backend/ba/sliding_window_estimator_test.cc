@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 #include <string>
@@ -111,6 +113,84 @@ TEST(SlidingWindowEstimatorTest, NewMonoLandmarksTakeEveryWindowKeyframesView) {
   }
   EXPECT_GT(checked, 500);
   EXPECT_GT(with_more_than_two_views, 100);
+}
+
+// A one-camera loop at keyframe 12 to keyframe 2: the frontend relabelled points of the frame
+// with keyframe 2's landmark ids, at the projections those landmarks would have from the
+// predicted pose turned by `turn_deg` about the camera's y axis (a look-alike place seen from
+// another heading when turn_deg is large). `tracked_points`: how many of the frame's own
+// observations are left (few: the current map alone cannot place the frame).
+EstimatorOutput RunLoopAtKeyframe12(double turn_deg, size_t tracked_points) {
+  const MonoScene scene;
+  SlidingWindowEstimatorOptions options;
+  options.mono_init.next_frame_min_inlier_ratio = 0.0;  // Keyframe k is frame k (see above).
+  options.background_solve = false;
+  SlidingWindowEstimator estimator(scene.rig, options);
+  std::vector<Pose> T_w_c;
+  for (int frame = 0; frame < 12; ++frame) {
+    T_w_c.push_back(estimator.Add(scene.Measure(frame)).T_w_c);
+  }
+  const Pose T_w_predicted = T_w_c[11] * (T_w_c[10].inverse() * T_w_c[11]);
+  Pose T_w_look_alike = T_w_predicted;
+  T_w_look_alike.linear() =
+      T_w_predicted.rotation() *
+      Eigen::AngleAxisd(turn_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  // The loop's points: keyframe 2's landmarks, which the frontend found in this frame (under
+  // other ids, dropped here) and relabelled; the frame's own observations: the other points.
+  std::set<LandmarkId> seen_by_2;
+  for (const FeatureObservation& o : scene.Measure(2).observations) seen_by_2.insert(o.landmark);
+  FrameMeasurement m = scene.Measure(12);
+  m.observations.clear();
+  for (const FeatureObservation& o : scene.Measure(12).observations) {
+    if (!seen_by_2.count(o.landmark) && m.observations.size() < tracked_points) {
+      m.observations.push_back(o);
+    }
+  }
+  LoopDetection loop;
+  loop.old_frame = FrameId(2);
+  std::vector<FeatureObservation> relabelled;
+  for (const LandmarkId id : seen_by_2) {
+    const std::optional<Eigen::Vector3d> p_w = estimator.ba().LandmarkPosition(id);
+    Eigen::Vector2d uv;
+    if (!p_w || !scene.rig.left.Project(T_w_look_alike.inverse() * *p_w, &uv) ||
+        !scene.rig.left.InImage(uv)) {
+      continue;
+    }
+    FeatureObservation o;
+    o.landmark = id;
+    o.uv = uv;
+    relabelled.push_back(o);
+    loop.relabelled.emplace_back(LandmarkId(50000 + id.value), id);
+  }
+  m.observations.insert(m.observations.end(), relabelled.begin(), relabelled.end());
+  loop.inliers = static_cast<int>(loop.relabelled.size());
+  EXPECT_GE(loop.inliers, 30);
+  m.loop = loop;
+  return estimator.Add(m);
+}
+
+// The orientation gate measures the turn a loop gives the keyframe against the pose the
+// current map gives it (else the constant-velocity prediction), so the loop's own relabelled
+// landmarks must not place the frame: placed by them, a look-alike place turned by 20 deg (the
+// gate: 10 deg) would turn it by nothing and pass.
+TEST(SlidingWindowEstimatorTest, AFrameIsNotPlacedByTheLoopItsGateJudges) {
+  const EstimatorOutput look_alike = RunLoopAtKeyframe12(20.0, 4);
+  EXPECT_FALSE(look_alike.loop_closed);
+  EXPECT_TRUE(look_alike.loop_refused);  // The frontend gives the points their ids back.
+  EXPECT_FALSE(look_alike.valid) << "4 observations of the current map cannot place the frame";
+  // The same look-alike seen with the frame's own observations: tracked by them, refused.
+  const EstimatorOutput tracked = RunLoopAtKeyframe12(20.0, 1000);
+  EXPECT_TRUE(tracked.valid);
+  EXPECT_FALSE(tracked.loop_closed);
+  // The right place at the right heading closes, and places a frame the current map cannot
+  // (judged from the constant-velocity prediction).
+  const EstimatorOutput right = RunLoopAtKeyframe12(0.0, 1000);
+  EXPECT_TRUE(right.valid);
+  EXPECT_TRUE(right.loop_closed);
+  EXPECT_FALSE(right.loop_refused);
+  const EstimatorOutput placed_by_loop = RunLoopAtKeyframe12(0.0, 4);
+  EXPECT_TRUE(placed_by_loop.valid) << placed_by_loop.note;
+  EXPECT_TRUE(placed_by_loop.loop_closed);
 }
 
 // Landmark fusion (SlidingWindowBa::FuseLandmarks) in the estimator: 120 tracks break at frame 8
