@@ -796,29 +796,27 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   // One camera: the loop closes from the tracked pose (the similarity moves it). When only the
   // loop's observations could place the frame, the loop is judged from the constant-velocity
   // prediction instead (the gate measures the turn from it); closed, it places the frame.
-  if (mono_loop && out.valid) {
-    out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c);
-  } else if (mono_loop) {
-    Pose T_w_loop = T_w_predicted;
-    if (CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_loop)) {
-      T_w_c = T_w_loop;
-      out.valid = true;
-      out.loop_closed = true;
-      out.note = "placed by the loop closure to frame " + std::to_string(m.loop->old_frame.value) +
-                 " (the current map alone could not place it)";
-    }
-  }
   if (mono_loop) {
-    // Unless the loop closes, the old landmarks' estimates are outliers of the drifted
-    // neighbourhood: this frame does not use them, and the frontend gives the points their ids
-    // back (loop_refused), so that the next frames observe the current landmarks again. A loop
-    // that closes confirms the old landmarks, also those an earlier refused loop had relabelled.
-    for (const auto& ids : m.loop->relabelled) {
-      if (out.loop_closed) {
-        unconfirmed_loop_landmarks_.erase(ids.second);
-      } else {
-        unconfirmed_loop_landmarks_.insert(ids.second);
+    if (out.valid) {
+      out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c);
+    } else {
+      Pose T_w_loop = T_w_predicted;
+      if (CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_loop)) {
+        T_w_c = T_w_loop;
+        out.valid = true;
+        out.loop_closed = true;
+        out.note = "placed by the loop closure to frame " +
+                   std::to_string(m.loop->old_frame.value) +
+                   " (the current map alone could not place it)";
       }
+    }
+    // Unless the loop closes, the old landmarks' estimates are outliers of the drifted
+    // neighbourhood: they stay unconfirmed (set above), and the frontend gives the points their
+    // ids back (loop_refused), so that the next frames observe the current landmarks again. A
+    // loop that closes confirms the old landmarks, also those an earlier refused loop had
+    // relabelled.
+    if (out.loop_closed) {
+      for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.erase(ids.second);
     }
     out.loop_refused = !out.loop_closed;
   }

@@ -392,10 +392,7 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
       cur->landmark[match->current_point[k]] = match->loop.relabelled[k].second;
       old_of[match->loop.relabelled[k].first] = match->loop.relabelled[k].second;
     }
-    for (LandmarkId& id : entry.landmark) {
-      const auto it = old_of.find(id);
-      if (it != old_of.end()) id = it->second;
-    }
+    RenameLandmarkIds(old_of, &entry.landmark);
   }
   const PlaceRecognitionStats& stats = place_recognition_.last_stats();
   VLOG(stats.candidates > 0 ? 1 : 2)
@@ -422,11 +419,7 @@ void Frontend::ReturnLoopIds(const LoopDetection& loop) {
   for (const auto& [cur, old] : loop.relabelled) before[old] = cur;
   const FrameId frame = prev_->id;
   const auto give_back = [&](TrackedFrame* f) {
-    if (!f || f->id != frame) return;
-    for (LandmarkId& id : f->landmark) {
-      const auto it = before.find(id);
-      if (it != before.end()) id = it->second;
-    }
+    if (f && f->id == frame) RenameLandmarkIds(before, &f->landmark);
   };
   give_back(&*prev_);
   give_back(keyframe_ ? &*keyframe_ : nullptr);

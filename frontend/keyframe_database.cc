@@ -45,14 +45,19 @@ std::optional<size_t> KeyframeDatabase::IndexOf(FrameId frame) const {
   return static_cast<size_t>(it - entries_.begin());
 }
 
+void RenameLandmarkIds(const std::unordered_map<LandmarkId, LandmarkId>& new_id,
+                       std::vector<LandmarkId>* ids) {
+  for (LandmarkId& id : *ids) {
+    const auto it = new_id.find(id);
+    if (it != new_id.end()) id = it->second;
+  }
+}
+
 bool KeyframeDatabase::RenameLandmarks(FrameId frame,
                                        const std::unordered_map<LandmarkId, LandmarkId>& new_id) {
   const std::optional<size_t> i = IndexOf(frame);
   if (!i) return false;
-  for (LandmarkId& id : entries_[*i].landmark) {
-    const auto it = new_id.find(id);
-    if (it != new_id.end()) id = it->second;
-  }
+  RenameLandmarkIds(new_id, &entries_[*i].landmark);
   return true;
 }
 

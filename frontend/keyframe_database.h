@@ -59,6 +59,10 @@ struct KeyframeEntry {
   DetectedImage Detection() const;
 };
 
+// Replaces every id of *ids that `new_id` maps (id now -> new id); the others stay.
+void RenameLandmarkIds(const std::unordered_map<LandmarkId, LandmarkId>& new_id,
+                       std::vector<LandmarkId>* ids);
+
 class KeyframeDatabase {
  public:
   // Appends an entry (keyframes in time order: CHECKs that frame ids increase and that the

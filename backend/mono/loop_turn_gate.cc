@@ -1,6 +1,5 @@
 #include "backend/mono/loop_turn_gate.h"
 
-
 namespace dala {
 
 double KeyframePathFrom(const std::map<KeyframeId, Pose>& T_w_kf, KeyframeId from,
