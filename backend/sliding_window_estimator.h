@@ -89,8 +89,9 @@
 // Culling (options.cull_held_keyframes, default on): a keyframe whose place an older keyframe
 // already holds (the frontend verified the old keyframe's view in it: matcher, PnP and at least
 // loop.place_min_inlier_fraction of the old view's points as inliers; FrameMeasurement::
-// place_held_by) is redundant with that holder for the map. It still does its work in the
-// window: it carries tracks, constrains the window solve, and can close a loop. Once it has left
+// place_held_by; not when that holder is this keyframe's loop and the loop is not closed) is
+// redundant with that holder for the map. It still does its work in the window: it carries
+// tracks, constrains the window solve, and can close a loop. Once it has left
 // the window (and the held keyframes), it is removed: its frames are stored relative to the
 // holder, T_holder_c = T_w_holder^-1 T_w_culled T_culled_c (so they follow later corrections of
 // the holder, which is physically next to them), the landmarks it anchored move with the holder

@@ -109,7 +109,11 @@ TrackResult System::Track(const Frame& frame) {
     local_map_handed_ = true;
     frontend_->SetLocalMap({frame.id, e.T_w_c, e.valid, std::move(e.local_map)});
   }
-  if (m.loop && e.loop_refused) frontend_->ReturnLoopIds(*m.loop);
+  if (m.loop && e.loop_refused) {
+    frontend_->ReturnLoopIds(*m.loop);
+    // The refused loop's old keyframe does not hold this keyframe's place (saved below).
+    if (m.place_held_by == m.loop->old_frame) m.place_held_by.reset();
+  }
   const auto t2 = Clock::now();
 
   FrameStats s;

@@ -97,7 +97,9 @@ struct FrameMeasurement {
   std::optional<LoopDetection> loop;
   // Set on a keyframe whose place an older keyframe's place-recognition entry already holds
   // (PlaceRecognitionOptions::one_entry_per_place): that keyframe's frame. The keyframe stores no
-  // entry; an estimator may cull it once it has done its part (SlidingWindowEstimator).
+  // entry; an estimator may cull it once it has done its part (SlidingWindowEstimator). When the
+  // holder is this keyframe's loop and the estimator does not close it (loop_refused), the place
+  // is not held after all: the frontend stores the entry (Frontend::ReturnLoopIds).
   std::optional<FrameId> place_held_by;
   // Frames since the last keyframe and this frame's tracked fraction of that keyframe's points.
   double tracked_fraction = 1.0;

@@ -403,9 +403,11 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
       << (match ? ", loop to frame " + std::to_string(match->loop.old_frame.value) : "");
   // One entry per place: a keyframe whose place an older entry holds adds no entry.
   *held_by = place_recognition_.HeldBy(entry, match, cur->detection, cur->stereo, cur->landmark);
+  keyframe_unstored_entry_.reset();
   if (*held_by) {
     VLOG(2) << "frame " << frame.id << ": its place is held by keyframe " << **held_by
             << "'s entry; not stored again";
+    if (match && match->loop.old_frame == **held_by) keyframe_unstored_entry_ = std::move(entry);
   } else {
     place_recognition_.Add(std::move(entry));
   }
@@ -425,8 +427,18 @@ void Frontend::ReturnLoopIds(const LoopDetection& loop) {
   give_back(keyframe_ ? &*keyframe_ : nullptr);
   give_back(tracked_keyframe_ ? &*tracked_keyframe_ : nullptr);
   place_recognition_.mutable_database()->RenameLandmarks(frame, before);
+  local_map_search_.RenameRemembered(frame, before);
   VLOG(1) << "frame " << frame << ": the loop to frame " << loop.old_frame << " was not closed; "
           << before.size() << " points take back their ids";
+  // The refused loop had made the old keyframe the holder of this keyframe's place.
+  if (keyframe_ && keyframe_->id == frame && keyframe_held_by_ == loop.old_frame &&
+      keyframe_unstored_entry_ && keyframe_unstored_entry_->frame == frame) {
+    RenameLandmarkIds(before, &keyframe_unstored_entry_->landmark);
+    place_recognition_.Add(std::move(*keyframe_unstored_entry_));
+    place_recognition_.ForgetHolder();
+    keyframe_unstored_entry_.reset();
+    keyframe_held_by_.reset();
+  }
 }
 
 void CheckFrameSuitsRig(const Frame& frame, const StereoRig& rig) {
@@ -609,7 +621,7 @@ bool Frontend::DecideKeyframe(const TrackedFrame& cur, bool stereo, bool guided,
   // One camera: the dead-reckoned translation has no unit, so no criterion on distance.
   if (!stereo) evidence.T_kf_cur.translation().setZero();
   evidence.stereo_baseline_m = stereo ? rig_.baseline : 0.0;
-  evidence.revisiting = keyframe_place_held_;
+  evidence.revisiting = keyframe_held_by_.has_value();
   out->tracked_fraction = evidence.tracked_fraction;
   return keyframe_policy_.IsKeyframe(evidence);
 }
@@ -696,7 +708,7 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   relocalised_prev_ = relocalised_prev_ || relocalised;
   if (out.is_keyframe) {
     keyframe_ = cur;
-    keyframe_place_held_ = out.place_held_by.has_value();
+    keyframe_held_by_ = out.place_held_by;
     frames_since_keyframe_ = 0;
   }
   prev_ = std::move(cur);

@@ -114,9 +114,11 @@ class Frontend {
   void UseMap(const SavedMap& map);
   // The estimator left the observations a loop relabelled unused (it did not close the loop:
   // EstimatorOutput::loop_refused): the frame just processed gives those points back the ids
-  // they had before the loop, in what the next frames track from and in its place-recognition
-  // entry, so that their tracks go on in the current map instead of ending in old ids the
-  // estimator ignores. Call it after Process, before the next frame.
+  // they had before the loop, in what the next frames track from, in the appearances the
+  // local-map search keeps and in its place-recognition entry, so that their tracks go on in the
+  // current map instead of ending in old ids the estimator ignores. A keyframe whose place the
+  // refused loop had given to the old keyframe (FrameMeasurement::place_held_by) holds its own
+  // place again: its entry joins the database. Call it after Process, before the next frame.
   void ReturnLoopIds(const LoopDetection& loop);
   // The keyframe database and the last search's statistics.
   const PlaceRecognition& place_recognition() const { return place_recognition_; }
@@ -210,7 +212,11 @@ class Frontend {
   double path_length_m_ = 0.0;  // Dead-reckoned distance travelled.
   int64_t next_landmark_ = 0;
   int frames_since_keyframe_ = 0;
-  bool keyframe_place_held_ = false;  // The last keyframe's place is held by an older one.
+  // The older entry that holds the last keyframe's place, if any, and the keyframe's own entry,
+  // left out of the database for it (DetectLoop). ReturnLoopIds stores that entry after all
+  // when the holder was a loop the estimator refused.
+  std::optional<FrameId> keyframe_held_by_;
+  std::optional<KeyframeEntry> keyframe_unstored_entry_;
   // A frame was relocalised from the database: once the estimator has placed a frame, the
   // stereo dead reckoning continues from the estimator's pose instead of the extrapolation of
   // the gap.

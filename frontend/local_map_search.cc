@@ -183,4 +183,17 @@ void LocalMapSearch::Remember(FrameId frame, const DetectedImage& detection,
   }
 }
 
+void LocalMapSearch::RenameRemembered(FrameId frame,
+                                      const std::unordered_map<LandmarkId, LandmarkId>& rename) {
+  // Taken out first: an id may be both an old id and another pair's new one.
+  std::vector<std::pair<LandmarkId, Appearance>> moved;
+  for (const auto& [old, now] : rename) {
+    const auto it = appearance_.find(old);
+    if (it == appearance_.end() || it->second.last_seen != frame.value) continue;
+    moved.emplace_back(now, it->second);
+    if (!IsMapped(old)) appearance_.erase(it);
+  }
+  for (auto& [now, appearance] : moved) appearance_[now] = std::move(appearance);
+}
+
 }  // namespace dala

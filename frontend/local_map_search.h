@@ -130,6 +130,10 @@ class LocalMapSearch {
   // Remembers the appearance of every point of frame `frame` that has a landmark id.
   void Remember(FrameId frame, const DetectedImage& detection,
                 const std::vector<LandmarkId>& landmark, const std::vector<int>& track_length);
+  // The points of frame `frame` (the last remembered) that had id `old` take the id `now`
+  // (old -> now in `rename`: a loop's relabelling the estimator did not use): the appearance
+  // frame `frame` gave `old` becomes `now`'s; `old` keeps none unless the map holds it.
+  void RenameRemembered(FrameId frame, const std::unordered_map<LandmarkId, LandmarkId>& rename);
 
  private:
   struct Appearance {

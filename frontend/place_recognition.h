@@ -203,6 +203,10 @@ class PlaceRecognition {
                                 const std::vector<LandmarkId>& landmark);
 
   void Add(KeyframeEntry entry) { database_.Add(std::move(entry)); }
+  // The loop that made the last keyframe's place held was not closed (the estimator refused
+  // it): that place is not the old entry's, so the next keyframe is not checked against the
+  // old path's next entries either (HeldBy).
+  void ForgetHolder() { last_holder_.reset(); }
   // A keyframe of a saved map (core/io/map_file.h) for relocalisation only (loop detection
   // never searches them): its points with a landmark id, in its camera when the landmark has a
   // position in `p_w` (stereo: those only), and its thumbnail as the global descriptor

@@ -18,6 +18,8 @@ struct LoopRun {
   int loops_detected = 0;
   int loops_closed = 0;
   int lost = 0;
+  // Keyframes whose loop was not closed and that added no place-recognition entry.
+  int refused_loops_without_place = 0;
 };
 
 Trajectory Prefix(const Trajectory& t, size_t n) {
@@ -37,10 +39,13 @@ LoopRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& option
   LoopRun run;
   Trajectory before, previous_trajectory;
   size_t first_loop = 0;
+  int places = 0;
   for (size_t i = 0; i < seq.size(); ++i) {
     const TrackResult r = system.Track(seq.Render(i));
     run.lost += r.status == TrackingStatus::kLost;
     const FrameStats& s = system.stats().back();
+    run.refused_loops_without_place += s.loop && !s.loop_closed && s.places == places;
+    places = s.places;
     if (s.loop && run.loops_detected == 0) {
       first_loop = i;
       before = previous_trajectory;  // The open-loop estimate of the frames before it.
@@ -224,8 +229,10 @@ TEST(LoopClosureE2e, OneCamerasLoopsMeetTheOrientationGate) {
   EXPECT_GE(gated.loops_detected, 1);
   EXPECT_EQ(gated.loops_closed, 0);
   // A refused loop's points take back their ids (Frontend::ReturnLoopIds): their tracks go on
-  // in the current map, and no frame is lost for the refusal.
+  // in the current map, and no frame is lost for the refusal. The old keyframe does not hold
+  // the place of a keyframe whose loop was refused: that keyframe stores its own entry.
   EXPECT_EQ(gated.lost, 0);
+  EXPECT_EQ(gated.refused_loops_without_place, 0);
   EXPECT_LT(run.eval.ate.translation.rmse, gated.eval.ate.translation.rmse);
   SetSystemOption("loop.spatial_gate=false", &options);
   const LoopRun ungated = RunSystem(seq, options, AlignmentType::kSim3);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <unordered_map>
 #include <vector>
 
 #include "frontend/harris.h"
@@ -82,6 +83,35 @@ TEST(LocalMapSearch, AStereoRigForgetsUnmappedAppearancesAfterOneFrame) {
   std::vector<int> track_length(s.ids.size(), 1);
   EXPECT_GT(search.Search(FrameId(4), Pose::Identity(), true, s.detection, &found, &track_length),
             static_cast<int>(0.9 * s.ids.size()));
+}
+
+// A loop relabelled frame 1's points with an old lap's ids (5000 + i), and the estimator did not
+// close it: the points take back their ids (Frontend::ReturnLoopIds), and so does the appearance
+// frame 1 gave them. The map of the current ids finds them; the old ids keep no appearance.
+TEST(LocalMapSearch, ALoopsRelabellingReturnedMovesTheAppearance) {
+  const Scene s = MakeScene();
+  std::vector<LandmarkId> old_ids;
+  std::unordered_map<LandmarkId, LandmarkId> back;
+  for (size_t i = 0; i < s.ids.size(); ++i) {
+    old_ids.push_back(LandmarkId(5000 + i));
+    back[old_ids.back()] = s.ids[i];
+  }
+  const auto found_in = [&](const LocalMap& map, bool returned) {
+    LocalMapSearch search(s.camera, LocalMapSearchOptions(), MatcherOptions::ForTracking(), false);
+    search.Remember(FrameId(1), s.detection, old_ids, std::vector<int>(s.ids.size(), 1));
+    if (returned) search.RenameRemembered(FrameId(1), back);
+    search.SetLocalMap(map);
+    std::vector<LandmarkId> found(s.ids.size());
+    std::vector<int> track_length(s.ids.size(), 1);
+    return search.Search(FrameId(1), Pose::Identity(), true, s.detection, &found, &track_length);
+  };
+  const int n = static_cast<int>(s.ids.size());
+  EXPECT_EQ(found_in(s.MapAfter(FrameId(1)), /*returned=*/false), 0);
+  EXPECT_GT(found_in(s.MapAfter(FrameId(1)), /*returned=*/true), static_cast<int>(0.9 * n));
+  Scene old_lap = s;
+  old_lap.ids = old_ids;
+  EXPECT_GT(found_in(old_lap.MapAfter(FrameId(1)), /*returned=*/false), static_cast<int>(0.9 * n));
+  EXPECT_EQ(found_in(old_lap.MapAfter(FrameId(1)), /*returned=*/true), 0);
 }
 
 }  // namespace
