@@ -851,10 +851,8 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
     first_frame_of_keyframe_[kf.id] = frames_.size();
     frames_.push_back({m.t_ns, kf.id, Pose::Identity()});
     keyframe_of_frame_[m.frame] = kf.id;
-    // A refused loop's old keyframe does not hold the place (the frontend stores the entry).
-    const bool held_by_refused_loop =
-        out.loop_refused && m.loop && m.place_held_by == m.loop->old_frame;
-    if (options_.cull_held_keyframes && m.place_held_by && !held_by_refused_loop) {
+    if (options_.cull_held_keyframes && m.place_held_by &&
+        !PlaceReleasedByRefusedLoop(m, out.loop_refused)) {
       const auto holder = keyframe_of_frame_.find(*m.place_held_by);
       if (holder != keyframe_of_frame_.end()) held_by_[kf.id] = holder->second;
     }

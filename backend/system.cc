@@ -112,7 +112,7 @@ TrackResult System::Track(const Frame& frame) {
   if (m.loop && e.loop_refused) {
     frontend_->ReturnLoopIds(*m.loop);
     // The refused loop's old keyframe does not hold this keyframe's place (saved below).
-    if (m.place_held_by == m.loop->old_frame) m.place_held_by.reset();
+    if (PlaceReleasedByRefusedLoop(m, e.loop_refused)) m.place_held_by.reset();
   }
   const auto t2 = Clock::now();
 

@@ -98,13 +98,23 @@ struct FrameMeasurement {
   // Set on a keyframe whose place an older keyframe's place-recognition entry already holds
   // (PlaceRecognitionOptions::one_entry_per_place): that keyframe's frame. The keyframe stores no
   // entry; an estimator may cull it once it has done its part (SlidingWindowEstimator). When the
-  // holder is this keyframe's loop and the estimator does not close it (loop_refused), the place
-  // is not held after all: the frontend stores the entry (Frontend::ReturnLoopIds).
+  // holder is this keyframe's loop and the estimator does not close it, the place is not held
+  // after all (PlaceReleasedByRefusedLoop).
   std::optional<FrameId> place_held_by;
   // Frames since the last keyframe and this frame's tracked fraction of that keyframe's points.
   double tracked_fraction = 1.0;
   FrontendTimings timings;
 };
+
+// The keyframe's place was given to the old keyframe by its loop (place_held_by), the loop
+// relabelled points, and the estimator did not close it (EstimatorOutput::loop_refused): the
+// place is the keyframe's own after all. The frontend stores its entry (Frontend::ReturnLoopIds),
+// the System records it for the saved map, the estimator does not cull it into the old keyframe.
+// (A loop that relabelled nothing found the old landmarks already tracked: that place is held.)
+inline bool PlaceReleasedByRefusedLoop(const FrameMeasurement& m, bool loop_refused) {
+  return loop_refused && m.loop && !m.loop->relabelled.empty() &&
+         m.place_held_by == m.loop->old_frame;
+}
 
 }  // namespace dala
 

@@ -407,7 +407,10 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
   if (*held_by) {
     VLOG(2) << "frame " << frame.id << ": its place is held by keyframe " << **held_by
             << "'s entry; not stored again";
-    if (match && match->loop.old_frame == **held_by) keyframe_unstored_entry_ = std::move(entry);
+    // One camera's estimator may refuse the loop that holds the place (ReturnLoopIds).
+    if (!rig_.is_stereo() && match && match->loop.old_frame == **held_by) {
+      keyframe_unstored_entry_ = std::move(entry);
+    }
   } else {
     place_recognition_.Add(std::move(entry));
   }
@@ -430,7 +433,8 @@ void Frontend::ReturnLoopIds(const LoopDetection& loop) {
   local_map_search_.RenameRemembered(frame, before);
   VLOG(1) << "frame " << frame << ": the loop to frame " << loop.old_frame << " was not closed; "
           << before.size() << " points take back their ids";
-  // The refused loop had made the old keyframe the holder of this keyframe's place.
+  // The refused loop had made the old keyframe the holder of this keyframe's place
+  // (PlaceReleasedByRefusedLoop).
   if (keyframe_ && keyframe_->id == frame && keyframe_held_by_ == loop.old_frame &&
       keyframe_unstored_entry_ && keyframe_unstored_entry_->frame == frame) {
     RenameLandmarkIds(before, &keyframe_unstored_entry_->landmark);

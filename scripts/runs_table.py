@@ -4,9 +4,9 @@
     python3 scripts/runs_table.py LABEL=DIR [LABEL=DIR ...] [--write docs/results.md --marker M]
 
 DIR is a `dala run --out` folder. Per run: the frames with a pose of those run, the keyframes in
-the map, the loops closed, the places stored for place recognition, the ATE RMSE (after the global BA where one ran), the online ATE
-(before it), the scale along the path, the global BA's time, the peak memory and the median time
-per frame. With --write, the table replaces the text between `<!-- MARKER:begin -->` and
+the map, the loops closed, the places stored for place recognition (-1: a report without them),
+the ATE RMSE (after the global BA where one ran), the online ATE (before it), the scale along the
+path, the global BA's time, the peak memory and the median time per frame. With --write, the table replaces the text between `<!-- MARKER:begin -->` and
 `<!-- MARKER:end -->` of that file. Standard library only.
 """
 import argparse
@@ -28,7 +28,7 @@ def row(label, folder):
     scale = s.get("scale_along_path", {})
     return "| %s | %d / %d | %d | %d | %d | %s | %s | %s | %s | %.0f MiB | %.1f ms |" % (
         label, s["frames_with_pose"], s["frames"], s["keyframes_in_map"], s["loops_closed"],
-        s["places"],
+        s.get("places", -1),
         "%.4f m" % s["ate"]["rmse"] if global_ba else "-",
         "%.4f m" % online if online is not None else "-",
         "%.3f-%.3f" % (scale["min"], scale["max"]) if scale.get("segments") else "-",

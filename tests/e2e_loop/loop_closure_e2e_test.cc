@@ -2,6 +2,9 @@
 // pose-graph correction) on rendered sequences with exact ground truth.
 #include <gtest/gtest.h>
 
+#include <set>
+#include <vector>
+
 #include "backend/system.h"
 #include "core/error.h"
 #include "core/eval/evaluate.h"
@@ -18,8 +21,12 @@ struct LoopRun {
   int loops_detected = 0;
   int loops_closed = 0;
   int lost = 0;
-  // Keyframes whose loop was not closed and that added no place-recognition entry.
+  // Keyframes whose loop was not closed and that added no place-recognition entry, and those
+  // with a pose that the System did not record for the saved map (System::keyframes()).
   int refused_loops_without_place = 0;
+  int refused_loops_not_saved = 0;
+  // Keyframes whose loop closed and whose place the old keyframe holds (no entry added).
+  int closed_loops_holding_old_place = 0;
 };
 
 Trajectory Prefix(const Trajectory& t, size_t n) {
@@ -40,11 +47,14 @@ LoopRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& option
   Trajectory before, previous_trajectory;
   size_t first_loop = 0;
   int places = 0;
+  std::vector<FrameId> refused_with_pose;
   for (size_t i = 0; i < seq.size(); ++i) {
     const TrackResult r = system.Track(seq.Render(i));
     run.lost += r.status == TrackingStatus::kLost;
     const FrameStats& s = system.stats().back();
     run.refused_loops_without_place += s.loop && !s.loop_closed && s.places == places;
+    run.closed_loops_holding_old_place += s.loop_closed && s.places == places;
+    if (s.loop && !s.loop_closed && s.valid) refused_with_pose.push_back(s.frame);
     places = s.places;
     if (s.loop && run.loops_detected == 0) {
       first_loop = i;
@@ -54,6 +64,9 @@ LoopRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& option
     run.loops_detected += s.loop;
     run.loops_closed += s.loop_closed;
   }
+  std::set<FrameId> saved;
+  for (const SavedKeyframe& kf : system.keyframes()) saved.insert(kf.frame);
+  for (const FrameId& f : refused_with_pose) run.refused_loops_not_saved += saved.count(f) == 0;
   const Trajectory final_trajectory = system.trajectory();
   run.eval = Evaluate(seq.ground_truth(), final_trajectory, eval);
   if (run.loops_detected > 0) {
@@ -226,6 +239,8 @@ TEST(LoopClosureE2e, OneCamerasLoopsMeetTheOrientationGate) {
             << " m, " << gated.lost << " frames lost" << std::endl;
   EXPECT_GE(run.loops_closed, 1);
   EXPECT_EQ(run.loops_closed, run.loops_detected);
+  // A closed loop's keyframe leaves its place to the old keyframe (one entry per place).
+  EXPECT_GE(run.closed_loops_holding_old_place, 1);
   EXPECT_GE(gated.loops_detected, 1);
   EXPECT_EQ(gated.loops_closed, 0);
   // A refused loop's points take back their ids (Frontend::ReturnLoopIds): their tracks go on
@@ -233,6 +248,7 @@ TEST(LoopClosureE2e, OneCamerasLoopsMeetTheOrientationGate) {
   // the place of a keyframe whose loop was refused: that keyframe stores its own entry.
   EXPECT_EQ(gated.lost, 0);
   EXPECT_EQ(gated.refused_loops_without_place, 0);
+  EXPECT_EQ(gated.refused_loops_not_saved, 0);
   EXPECT_LT(run.eval.ate.translation.rmse, gated.eval.ate.translation.rmse);
   SetSystemOption("loop.spatial_gate=false", &options);
   const LoopRun ungated = RunSystem(seq, options, AlignmentType::kSim3);

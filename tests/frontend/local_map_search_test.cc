@@ -96,22 +96,33 @@ TEST(LocalMapSearch, ALoopsRelabellingReturnedMovesTheAppearance) {
     old_ids.push_back(LandmarkId(5000 + i));
     back[old_ids.back()] = s.ids[i];
   }
-  const auto found_in = [&](const LocalMap& map, bool returned) {
+  Scene old_lap = s;
+  old_lap.ids = old_ids;
+  // `returned_at`: the frame whose appearances the rename moves (0: none); `mapped_then`: the
+  // map of the old ids is frame 1's when the rename happens (the System hands it over first).
+  const auto found_in = [&](const LocalMap& map, int returned_at, bool mapped_then = false) {
     LocalMapSearch search(s.camera, LocalMapSearchOptions(), MatcherOptions::ForTracking(), false);
     search.Remember(FrameId(1), s.detection, old_ids, std::vector<int>(s.ids.size(), 1));
-    if (returned) search.RenameRemembered(FrameId(1), back);
+    if (mapped_then) search.SetLocalMap(old_lap.MapAfter(FrameId(1)));
+    if (returned_at > 0) search.RenameRemembered(FrameId(returned_at), back);
     search.SetLocalMap(map);
     std::vector<LandmarkId> found(s.ids.size());
     std::vector<int> track_length(s.ids.size(), 1);
     return search.Search(FrameId(1), Pose::Identity(), true, s.detection, &found, &track_length);
   };
   const int n = static_cast<int>(s.ids.size());
-  EXPECT_EQ(found_in(s.MapAfter(FrameId(1)), /*returned=*/false), 0);
-  EXPECT_GT(found_in(s.MapAfter(FrameId(1)), /*returned=*/true), static_cast<int>(0.9 * n));
-  Scene old_lap = s;
-  old_lap.ids = old_ids;
-  EXPECT_GT(found_in(old_lap.MapAfter(FrameId(1)), /*returned=*/false), static_cast<int>(0.9 * n));
-  EXPECT_EQ(found_in(old_lap.MapAfter(FrameId(1)), /*returned=*/true), 0);
+  const int most = static_cast<int>(0.9 * n);
+  EXPECT_EQ(found_in(s.MapAfter(FrameId(1)), 0), 0);
+  EXPECT_GT(found_in(s.MapAfter(FrameId(1)), 1), most);
+  EXPECT_GT(found_in(old_lap.MapAfter(FrameId(1)), 0), most);
+  EXPECT_EQ(found_in(old_lap.MapAfter(FrameId(1)), 1), 0);
+  // Only the appearances of the frame named move.
+  EXPECT_EQ(found_in(s.MapAfter(FrameId(1)), 2), 0);
+  EXPECT_GT(found_in(old_lap.MapAfter(FrameId(1)), 2), most);
+  // An old id the map holds keeps its appearance (the search still needs one), and the current
+  // id gets it too.
+  EXPECT_GT(found_in(old_lap.MapAfter(FrameId(1)), 1, /*mapped_then=*/true), most);
+  EXPECT_GT(found_in(s.MapAfter(FrameId(1)), 1, /*mapped_then=*/true), most);
 }
 
 }  // namespace
