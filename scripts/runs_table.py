@@ -6,8 +6,9 @@
 DIR is a `dala run --out` folder. Per run: the frames with a pose of those run, the keyframes in
 the map, the loops closed, the places stored for place recognition (-1: a report without them),
 the ATE RMSE (after the global BA where one ran), the online ATE (before it), the scale along the
-path, the global BA's time, the peak memory and the median time per frame. With --write, the table replaces the text between `<!-- MARKER:begin -->` and
-`<!-- MARKER:end -->` of that file. Standard library only.
+path, the global BA's time, the peak memory and the median time per frame. With --write, the
+table replaces the text between `<!-- MARKER:begin -->` and `<!-- MARKER:end -->` of that file.
+Standard library only.
 """
 import argparse
 import json
