@@ -745,14 +745,18 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   // One camera, a loop detected at this keyframe: the observations the frontend relabelled with
   // the old landmarks' ids are the loop's to judge (CloseMonoLoop), not this frame's. Placed by
   // them, the frame would already sit in the old neighbourhood, and the loop, right or wrong,
-  // would turn it by nothing (the orientation gate would measure nothing).
+  // would turn it by nothing (the orientation gate would measure nothing). Refused, the frame
+  // keeps those points under the ids the current map knows them by (`before_loop`; the frontend
+  // gives them back too: Frontend::ReturnLoopIds), so that the refusal costs it nothing.
   const bool mono_loop = !stereo && !first && m.is_keyframe && m.loop && options_.loop.enable;
+  const FrameMeasurement before_loop = mono_loop ? WithIdsBeforeLoop(m) : FrameMeasurement();
   if (mono_loop) {
     for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.insert(ids.second);
   }
+  std::string loop_not_closed;  // Why a detected loop was not closed (the frame's note).
   if (!first) {
     if (stereo && m.is_keyframe && m.loop && options_.loop.enable) {
-      out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c);
+      out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c, &loop_not_closed);
     }
     // Pose-only tracking against the window (a keyframe: before it joins the window); a frame
     // that resumed the old map has its pose already.
@@ -798,10 +802,10 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   // prediction instead (the gate measures the turn from it); closed, it places the frame.
   if (mono_loop) {
     if (out.valid) {
-      out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c);
+      out.loop_closed = CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_c, &loop_not_closed);
     } else {
       Pose T_w_loop = T_w_predicted;
-      if (CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_loop)) {
+      if (CloseMonoLoop(m, KeyframeId(num_keyframes_), &T_w_loop, &loop_not_closed)) {
         T_w_c = T_w_loop;
         out.valid = true;
         out.loop_closed = true;
@@ -819,6 +823,24 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
       for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.erase(ids.second);
     }
     out.loop_refused = !out.loop_closed;
+    // Refused where the frame's other points could not place it (the loop relabelled most of
+    // its mapped ones): placed by all of them under their current ids.
+    if (out.loop_refused && !out.valid) {
+      const std::vector<BaObservation> mapped = WindowObservations(before_loop);
+      const PoseOnlyResult r = ba_.TrackFrame(mapped, T_w_predicted, options_.pose_only);
+      if (r.status == PoseOnlyStatus::kOk) {
+        T_w_c = r.T_w_c;
+        out.valid = true;
+        out.note.clear();  // Its reason for being lost.
+      }
+    }
+  }
+  // What the frame keeps: the old ids where its loop closed, the current map's where it did not.
+  const FrameMeasurement& kept = mono_loop && !out.loop_closed ? before_loop : m;
+  if (!loop_not_closed.empty()) {
+    const std::string loop_note = "loop to frame " + std::to_string(m.loop->old_frame.value) +
+                                  " not closed: " + loop_not_closed;
+    out.note = out.note.empty() ? loop_note : out.note + "; " + loop_note;
   }
   // A mono keyframe needs a tracked pose (see the class comment).
   const bool new_keyframe = first || (m.is_keyframe && (stereo || out.valid));
@@ -828,7 +850,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
     // place recognition after a long loss), nothing links the keyframe to the window's
     // keyframes: the window starts again from it, held as the gauge at its relocalised pose.
     relocalised_ = false;
-    if (OutsideWindow(m)) {
+    if (OutsideWindow(kept)) {
       RestartWindow();
       out.note = "relocalised in the map (a place seen before); the window starts again here";
       VLOG(1) << "frame " << m.frame << ": " << out.note;
@@ -839,8 +861,8 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
     kf.id = KeyframeId(num_keyframes_++);
     kf.t_ns = m.t_ns;
     kf.T_w_c = T_w_c;
-    kf.observations = SelectKeyframeObservations(m, T_w_c);
-    AddToWindow(kf, m);
+    kf.observations = SelectKeyframeObservations(kept, T_w_c);
+    AddToWindow(kf, kept);
     // A bridged keyframe keeps the bridge's relative pose as a prior while its own landmarks
     // are new (SlidingWindowBa::AddRelativePosePrior); a loop closed here moved it since.
     if (bridged_from && !out.loop_closed && ba_.KeyframePose(bridged_from->first)) {
@@ -856,7 +878,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
       const auto holder = keyframe_of_frame_.find(*m.place_held_by);
       if (holder != keyframe_of_frame_.end()) held_by_[kf.id] = holder->second;
     }
-    if (!stereo) RememberLastKeyframe(kf.id, m);
+    if (!stereo) RememberLastKeyframe(kf.id, kept);
     ReportLandmarks(&out);
     if (options_.background_solve) {
       solved_in_background_ = kf.id;
@@ -868,7 +890,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   } else {
     const KeyframeId ref(num_keyframes_ - 1);
     frames_.push_back({m.t_ns, ref, KeyframePoseNow(ref).inverse() * T_w_c});
-    if (out.valid) DeferFrameRefinement(frames_.size() - 1, m);
+    if (out.valid) DeferFrameRefinement(frames_.size() - 1, kept);
     ReportLandmarks(&out);
   }
   // After lost frames T_w_prev_ is a guess: the last tracked velocity is kept.
@@ -879,7 +901,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   out.T_w_c = T_w_c;
   out.keyframes_in_map = num_keyframes_in_map();
   if (stereo) out.disparity_offset_px = disparity_offset_px;
-  if (!stereo) NoteMonoTracking(m, out.valid, T_w_c, &out);
+  if (!stereo) NoteMonoTracking(kept, out.valid, T_w_c, &out);
   // A lost stereo frame has no pose either: it would be an extrapolation (a lost keyframe still
   // joins the window at that guess, to carry the stereo landmarks it starts).
   if (stereo && !out.valid) frames_.back().has_pose = false;

@@ -338,17 +338,20 @@ class SlidingWindowEstimator : public Estimator {
   std::vector<BaObservation> WindowObservations(const FrameMeasurement& m) const;
   // Solves the pose graph with the new loop edge (old keyframe -> the keyframe `cur_id` about
   // to be added at *T_w_c) and applies the correction; false (nothing changed) if the old frame
-  // is not a keyframe or the solve fails.
-  bool CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c);
+  // is not a keyframe or the solve fails, *why_not then says which (the frame's note).
+  bool CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c, std::string* why_not);
   // One camera (m.loop, *T_w_c tracked): the same over Sim(3) (backend/ba/sim3_pose_graph.h);
   // the loop edge places the keyframe by PnP of m on the old landmarks (else by the similarity)
   // with the scale of the recognised landmarks' two estimates (else left to the graph). Frames
   // between keyframes are rescaled with their keyframe; the previous frame's pose follows.
-  // Refused (false) when the loop would turn the camera beyond the gate (MonoLoopTurn).
-  bool CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id, Pose* T_w_c);
+  // Refused (false, *why_not says why) when the loop would turn the camera beyond the gate
+  // (MonoLoopTurn), when neither a similarity nor a PnP places the keyframe among the old
+  // landmarks, or when the old frame is not a keyframe or the graph's solve fails.
+  bool CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id, Pose* T_w_c,
+                     std::string* why_not);
   // One camera: how far a loop that puts the current keyframe (tracked at T_w_c) at T_w_c_loop
   // turns it, and whether that is within the gate (BaLoopClosureOptions::mono_max_turn_deg;
-  // always within with the gate off); logs a refusal.
+  // always within with the gate off).
   LoopTurn MonoLoopTurn(KeyframeId old, const Pose& T_w_c, const Pose& T_w_c_loop,
                         FrameId old_frame) const;
   // A new, empty window (no marginalisation prior); every landmark keeps its last position

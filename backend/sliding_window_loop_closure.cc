@@ -2,7 +2,9 @@
 // an SE(3) pose graph when the scale is observed (stereo), a Sim(3) one with one camera.
 #include <glog/logging.h>
 
+#include <iomanip>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "backend/mono/loop_sim3.h"
@@ -44,9 +46,11 @@ struct LoopClosureInformation {
 
 }  // namespace
 
-bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c) {
+bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur_id, Pose* T_w_c,
+                                       std::string* why_not) {
   const auto old = keyframe_of_frame_.find(loop.old_frame);
   if (old == keyframe_of_frame_.end()) {
+    *why_not = "the old frame is not a keyframe of the map";
     LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
     return false;
   }
@@ -87,6 +91,7 @@ bool SlidingWindowEstimator::CloseLoop(const LoopDetection& loop, KeyframeId cur
   const std::map<KeyframeId, Pose> corrected =
       OptimizePoseGraph(T_w_kf, edges, options_.loop.pose_graph, &summary);
   if (!summary.usable) {
+    *why_not = "the pose graph's solve failed";
     LOG(WARNING) << "loop pose graph failed: loop to frame " << loop.old_frame << " ignored";
     return false;
   }
@@ -125,10 +130,11 @@ LoopTurn SlidingWindowEstimator::MonoLoopTurn(KeyframeId old, const Pose& T_w_c,
 }
 
 bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId cur_id,
-                                           Pose* T_w_c) {
+                                           Pose* T_w_c, std::string* why_not) {
   const LoopDetection& loop = *m.loop;
   const auto old = keyframe_of_frame_.find(loop.old_frame);
   if (old == keyframe_of_frame_.end()) {
+    *why_not = "the old frame is not a keyframe of the map";
     LOG(WARNING) << "loop to frame " << loop.old_frame << ", which is not a keyframe: ignored";
     return false;
   }
@@ -152,14 +158,22 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   const std::optional<Pose> T_w_cur_old = PnpPose(
       m, [&](LandmarkId id) { return old_ids.count(id) > 0; }, options_.loop.mono_pnp_min_inliers);
   if (!sim3 && !T_w_cur_old) {
-    VLOG(1) << "loop to frame " << loop.old_frame << ": no Sim(3) from " << p_cur.size()
-            << " landmarks mapped on both sides, no PnP on the old ones: ignored";
+    *why_not = "no similarity from the " + std::to_string(p_cur.size()) +
+               " recognised landmarks mapped on both sides, no PnP pose on the old landmarks";
+    VLOG(1) << "loop to frame " << loop.old_frame << ": " << *why_not << ": ignored";
     return false;
   }
   Sim3 S_w_cur_in_old = sim3 ? sim3->S_old_cur * Sim3{*T_w_c, 1.0} : Sim3{*T_w_cur_old, 1.0};
   if (T_w_cur_old) S_w_cur_in_old.T = *T_w_cur_old;
   const LoopTurn turn = MonoLoopTurn(old->second, *T_w_c, S_w_cur_in_old.T, loop.old_frame);
-  if (!turn.within) return false;
+  if (!turn.within) {
+    std::ostringstream why;
+    why << "it would turn the camera by " << std::fixed << std::setprecision(1) << turn.turn_deg
+        << " deg, more than the gate's " << turn.max_deg
+        << " deg (loop.gate_rotation_deg, loop.gate_rotation_deg_per_m)";
+    *why_not = why.str();
+    return false;
+  }
   const double loop_scale_sigma =
       sim3 ? options_.loop.mono_loop_scale_sigma : options_.loop.mono_pnp_scale_sigma;
   // Nodes at the current estimates, scale 1 (the map's unit everywhere).
@@ -189,6 +203,7 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   const std::map<KeyframeId, Sim3> corrected =
       OptimizeSim3PoseGraph(S_w_kf, edges, options_.loop.pose_graph, &summary);
   if (!summary.usable) {
+    *why_not = "the Sim(3) pose graph's solve failed";
     LOG(WARNING) << "loop Sim(3) pose graph failed: loop to frame " << loop.old_frame << " ignored";
     return false;
   }

@@ -116,6 +116,10 @@ inline bool PlaceReleasedByRefusedLoop(const FrameMeasurement& m, bool loop_refu
          m.place_held_by == m.loop->old_frame;
 }
 
+// m with the points its loop relabelled under the ids they had before the loop (the current
+// map's landmarks): what the frame observes if the loop is not closed. m itself without a loop.
+FrameMeasurement WithIdsBeforeLoop(const FrameMeasurement& m);
+
 }  // namespace dala
 
 #endif  // DALA_CORE_FRAME_MEASUREMENT_H_

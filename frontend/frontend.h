@@ -118,7 +118,8 @@ class Frontend {
   // local-map search keeps and in its place-recognition entry, so that their tracks go on in the
   // current map instead of ending in old ids the estimator ignores. A keyframe whose place the
   // refused loop had given to the old keyframe (FrameMeasurement::place_held_by) holds its own
-  // place again: its entry joins the database. Call it after Process, before the next frame.
+  // place again: its entry joins the database. The next keyframe searches for a loop again
+  // (PlaceRecognition::LoopNotClosed). Call it after Process, before the next frame.
   void ReturnLoopIds(const LoopDetection& loop);
   // The keyframe database and the last search's statistics.
   const PlaceRecognition& place_recognition() const { return place_recognition_; }

@@ -99,8 +99,9 @@ struct PlaceRecognitionOptions {
   MotionEstimatorOptions pnp = DefaultPnpOptions();
   int min_inliers = 30;
   double min_inlier_ratio = 0.3;
-  // After an accepted loop, this many keyframes are not searched (one loop edge per revisit
-  // is enough for the pose graph; more cost time and add nothing but redundancy).
+  // After a loop, this many keyframes are not searched (one loop edge per revisit is enough
+  // for the pose graph; more cost time and add nothing but redundancy); after one the estimator
+  // did not close, the next is (LoopNotClosed).
   int keyframes_between_loops = 5;
   // One camera: the gate's radius is this fraction of the path between the two keyframes (map
   // units, no radius in metres: the unit is arbitrary), and an entry keeps at most this many
@@ -207,6 +208,10 @@ class PlaceRecognition {
   // it): that place is not the old entry's, so the next keyframe is not checked against the
   // old path's next entries either (HeldBy).
   void ForgetHolder() { last_holder_.reset(); }
+  // The estimator did not close the last loop Detect found: the next keyframe is searched
+  // (keyframes_between_loops counts from a loop that was closed; one that was not corrected
+  // nothing, and a better candidate may verify a keyframe later).
+  void LoopNotClosed() { keyframes_since_loop_ = kNoLoopYet; }
   // A keyframe of a saved map (core/io/map_file.h) for relocalisation only (loop detection
   // never searches them): its points with a landmark id, in its camera when the landmark has a
   // position in `p_w` (stereo: those only), and its thumbnail as the global descriptor
@@ -264,7 +269,8 @@ class PlaceRecognition {
   KeyframeDatabase database_;
   KeyframeDatabase saved_map_;  // AddSavedKeyframe.
   PlaceRecognitionStats stats_;
-  int keyframes_since_loop_ = 1 << 30;
+  static constexpr int kNoLoopYet = 1 << 30;
+  int keyframes_since_loop_ = kNoLoopYet;
   // The entry that held the previous keyframe's place, the previous keyframe in that entry's
   // camera (the verified pose), and the previous keyframe's dead-reckoned pose.
   std::optional<FrameId> last_holder_;

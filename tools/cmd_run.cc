@@ -419,6 +419,23 @@ std::string EstimatorLimitNote(const System& system, const SystemOptions& option
          "this filter give it odometry (odometry.txt)";
 }
 
+// The loops the estimator did not close, and the first one's reason (its frame's note).
+std::string LoopsNotClosedNote(const System& system) {
+  int count = 0;
+  const FrameStats* first = nullptr;
+  for (const FrameStats& s : system.stats()) {
+    if (!s.loop || s.loop_closed) continue;
+    ++count;
+    if (!first) first = &s;
+  }
+  if (count == 0) return "";
+  std::ostringstream os;
+  os << count << " not closed; the first at frame " << first->frame.value << ": "
+     << (first->note.empty() ? "no reason given" : first->note)
+     << (count > 1 ? " (the others: their frames' notes in report.json)" : "");
+  return os.str();
+}
+
 // The summary `dala run` prints (and report.html shows).
 void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::json& summary,
                   const RefinementSummary& refinement, size_t frames_with_pose,
@@ -431,6 +448,9 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
       << c.initialising << " initialising, " << frames_with_pose << " with a pose, " << keyframes
       << " keyframes, " << c.loops << " loops detected, " << c.loops_closed << " closed)\n"
       << "scale       " << system.ScaleDescription() << "\n";
+  if (const std::string note = LoopsNotClosedNote(system); !note.empty()) {
+    out << "loops       " << note << "\n";
+  }
   if (const std::string note = system.estimator().DisparityOffsetNote(); !note.empty()) {
     out << "disparity   offset " << note << "\n";
   }

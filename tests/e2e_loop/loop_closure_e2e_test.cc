@@ -27,6 +27,10 @@ struct LoopRun {
   int refused_loops_not_saved = 0;
   // Keyframes whose loop closed and whose place the old keyframe holds (no entry added).
   int closed_loops_holding_old_place = 0;
+  // Loops not closed whose frame's note does not say why.
+  int refused_loops_without_reason = 0;
+  // The fewest keyframes from one loop detected to the next (-1: fewer than two loops).
+  int min_keyframes_between_loops = -1;
 };
 
 Trajectory Prefix(const Trajectory& t, size_t n) {
@@ -48,10 +52,24 @@ LoopRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& option
   size_t first_loop = 0;
   int places = 0;
   std::vector<FrameId> refused_with_pose;
+  int keyframes = 0;
+  std::optional<int> last_loop_keyframe;
   for (size_t i = 0; i < seq.size(); ++i) {
     const TrackResult r = system.Track(seq.Render(i));
     run.lost += r.status == TrackingStatus::kLost;
     const FrameStats& s = system.stats().back();
+    keyframes += s.keyframe;
+    if (s.loop) {
+      if (last_loop_keyframe) {
+        const int between = keyframes - *last_loop_keyframe;
+        if (run.min_keyframes_between_loops < 0 || between < run.min_keyframes_between_loops) {
+          run.min_keyframes_between_loops = between;
+        }
+      }
+      last_loop_keyframe = keyframes;
+    }
+    run.refused_loops_without_reason +=
+        s.loop && !s.loop_closed && s.note.find(" not closed: ") == std::string::npos;
     run.refused_loops_without_place += s.loop && !s.loop_closed && s.places == places;
     run.closed_loops_holding_old_place += s.loop_closed && s.places == places;
     if (s.loop && !s.loop_closed && s.valid) refused_with_pose.push_back(s.frame);
@@ -239,13 +257,21 @@ TEST(LoopClosureE2e, OneCamerasLoopsMeetTheOrientationGate) {
             << " m, " << gated.lost << " frames lost" << std::endl;
   EXPECT_GE(run.loops_closed, 1);
   EXPECT_EQ(run.loops_closed, run.loops_detected);
-  // A closed loop's keyframe leaves its place to the old keyframe (one entry per place).
+  // A closed loop's keyframe leaves its place to the old keyframe (one entry per place), and the
+  // next keyframes_between_loops keyframes are not searched.
   EXPECT_GE(run.closed_loops_holding_old_place, 1);
+  EXPECT_GT(run.min_keyframes_between_loops, options.frontend.loop.keyframes_between_loops);
   EXPECT_GE(gated.loops_detected, 1);
   EXPECT_EQ(gated.loops_closed, 0);
+  // A refused loop says why in its frame's note, and the next keyframe searches again.
+  EXPECT_EQ(gated.refused_loops_without_reason, 0);
+  EXPECT_GE(gated.min_keyframes_between_loops, 1);
+  EXPECT_LE(gated.min_keyframes_between_loops, options.frontend.loop.keyframes_between_loops);
   // A refused loop's points take back their ids (Frontend::ReturnLoopIds): their tracks go on
-  // in the current map, and no frame is lost for the refusal. The old keyframe does not hold
-  // the place of a keyframe whose loop was refused: that keyframe stores its own entry.
+  // in the current map, and no frame is lost for the refusal (the frame is placed by its points
+  // under their current ids: loops at consecutive keyframes relabel most of them). The old
+  // keyframe does not hold the place of a keyframe whose loop was refused: that keyframe stores
+  // its own entry.
   EXPECT_EQ(gated.lost, 0);
   EXPECT_EQ(gated.refused_loops_without_place, 0);
   EXPECT_EQ(gated.refused_loops_not_saved, 0);

@@ -128,6 +128,12 @@ TEST(PlaceRecognition, FindsTheRevisitAndItsPose) {
   // Right after the loop the next keyframes are not searched (keyframes_between_loops).
   EXPECT_FALSE(pr.Detect(query, cur.detection, cur.stereo, cur.landmark).has_value());
   EXPECT_EQ(pr.last_stats().searched, 0);
+  // Unless the estimator did not close it: the next keyframe is searched again.
+  pr.LoopNotClosed();
+  const std::optional<PlaceMatch> again = pr.Detect(query, cur.detection, cur.stereo, cur.landmark);
+  EXPECT_GT(pr.last_stats().searched, 0);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->loop.old_frame, FrameId(0));
 }
 
 // The gate bounds the orientation too: a verified pose turned from the dead-reckoned one by more
