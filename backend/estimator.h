@@ -55,6 +55,9 @@ struct EstimatorOutput {
   // the old landmarks' ids are left unused (one camera: the gate refused the loop, or nothing
   // verified it); the frontend gives the points their ids back (Frontend::ReturnLoopIds).
   bool loop_refused = false;
+  // Why the estimator did not close the frame's loop ("the old frame is not a keyframe of the
+  // map", "it would turn the camera by ..."); empty when it closed it or judged none.
+  std::string loop_not_closed;
 };
 
 // What Estimator::Refine did.

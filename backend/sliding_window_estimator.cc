@@ -749,11 +749,17 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   // keeps those points under the ids the current map knows them by (`before_loop`; the frontend
   // gives them back too: Frontend::ReturnLoopIds), so that the refusal costs it nothing.
   const bool mono_loop = !stereo && !first && m.is_keyframe && m.loop && options_.loop.enable;
-  const FrameMeasurement before_loop = mono_loop ? WithIdsBeforeLoop(m) : FrameMeasurement();
+  // (The frontend's ids: landmark fusion renames them after the ids before the loop are back.)
+  const FrameMeasurement before_loop = !mono_loop ? FrameMeasurement()
+                                       : fused_into_.empty()
+                                           ? WithIdsBeforeLoop(m)
+                                           : WithFusedIds(WithIdsBeforeLoop(measurement));
   if (mono_loop) {
     for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.insert(ids.second);
   }
   std::string loop_not_closed;  // Why a detected loop was not closed (the frame's note).
+  bool placed_by_window = false;  // By the pose-only tracking against the window.
+  bool recovered_here = false;    // By RecoverPose (relocalised_ set for it).
   if (!first) {
     if (stereo && m.is_keyframe && m.loop && options_.loop.enable) {
       out.loop_closed = CloseLoop(*m.loop, KeyframeId(num_keyframes_), &T_w_c, &loop_not_closed);
@@ -769,6 +775,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
     if (r.status == PoseOnlyStatus::kOk) {
       T_w_c = r.T_w_c;
       out.valid = true;
+      placed_by_window = true;
     } else if (!resumed) {
       std::ostringstream why;
       why << "lost: tracking against the window " << PoseOnlyStatusName(r.status) << " ("
@@ -782,6 +789,7 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
       T_w_c = *recovered;
       out.valid = true;
       relocalised_ = true;
+      recovered_here = !resumed;
     } else {
       why_lost += ", the PnP recovery on every mapped landmark failed";
     }
@@ -823,25 +831,23 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
       for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.erase(ids.second);
     }
     out.loop_refused = !out.loop_closed;
-    // Refused where the frame's other points could not place it (the loop relabelled most of
-    // its mapped ones): placed by all of them under their current ids.
-    if (out.loop_refused && !out.valid) {
+    // Refused where the frame's other points could not place it against the window (the loop
+    // relabelled most of its mapped ones): placed by all of them under their current ids,
+    // rather than by the PnP recovery or the bridge, or not at all.
+    if (out.loop_refused && !placed_by_window && !resumed) {
       const std::vector<BaObservation> mapped = WindowObservations(before_loop);
       const PoseOnlyResult r = ba_.TrackFrame(mapped, T_w_predicted, options_.pose_only);
       if (r.status == PoseOnlyStatus::kOk) {
         T_w_c = r.T_w_c;
         out.valid = true;
-        out.note.clear();  // Its reason for being lost.
+        out.note.clear();  // Why it was lost, or how it was bridged.
+        bridged_from.reset();
+        if (recovered_here) relocalised_ = false;
       }
     }
   }
   // What the frame keeps: the old ids where its loop closed, the current map's where it did not.
   const FrameMeasurement& kept = mono_loop && !out.loop_closed ? before_loop : m;
-  if (!loop_not_closed.empty()) {
-    const std::string loop_note = "loop to frame " + std::to_string(m.loop->old_frame.value) +
-                                  " not closed: " + loop_not_closed;
-    out.note = out.note.empty() ? loop_note : out.note + "; " + loop_note;
-  }
   // A mono keyframe needs a tracked pose (see the class comment).
   const bool new_keyframe = first || (m.is_keyframe && (stereo || out.valid));
   if (new_keyframe && out.valid && relocalised_) {
@@ -902,6 +908,12 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   out.keyframes_in_map = num_keyframes_in_map();
   if (stereo) out.disparity_offset_px = disparity_offset_px;
   if (!stereo) NoteMonoTracking(kept, out.valid, T_w_c, &out);
+  if (!loop_not_closed.empty()) {
+    out.loop_not_closed = loop_not_closed;
+    const std::string loop_note = "loop to frame " + std::to_string(m.loop->old_frame.value) +
+                                  " not closed: " + loop_not_closed;
+    out.note = out.note.empty() ? loop_note : out.note + "; " + loop_note;
+  }
   // A lost stereo frame has no pose either: it would be an extrapolation (a lost keyframe still
   // joins the window at that guess, to carry the stereo landmarks it starts).
   if (stereo && !out.valid) frames_.back().has_pose = false;

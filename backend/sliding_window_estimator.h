@@ -351,7 +351,7 @@ class SlidingWindowEstimator : public Estimator {
                      std::string* why_not);
   // One camera: how far a loop that puts the current keyframe (tracked at T_w_c) at T_w_c_loop
   // turns it, and whether that is within the gate (BaLoopClosureOptions::mono_max_turn_deg;
-  // always within with the gate off).
+  // always within with the gate off); logs a refusal.
   LoopTurn MonoLoopTurn(KeyframeId old, const Pose& T_w_c, const Pose& T_w_c_loop,
                         FrameId old_frame) const;
   // A new, empty window (no marginalisation prior); every landmark keeps its last position

@@ -168,7 +168,7 @@ bool SlidingWindowEstimator::CloseMonoLoop(const FrameMeasurement& m, KeyframeId
   const LoopTurn turn = MonoLoopTurn(old->second, *T_w_c, S_w_cur_in_old.T, loop.old_frame);
   if (!turn.within) {
     std::ostringstream why;
-    why << "it would turn the camera by " << std::fixed << std::setprecision(1) << turn.turn_deg
+    why << "it would turn the camera by " << std::setprecision(3) << turn.turn_deg
         << " deg, more than the gate's " << turn.max_deg
         << " deg (loop.gate_rotation_deg, loop.gate_rotation_deg_per_m)";
     *why_not = why.str();

@@ -134,6 +134,7 @@ TrackResult System::Track(const Frame& frame) {
   s.loop = m.loop.has_value();
   s.loop_closed = e.loop_closed;
   if (m.loop) s.loop_old_frame = m.loop->old_frame;
+  s.loop_not_closed = e.loop_not_closed;
   s.frontend = m.timings;
   s.estimator_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
   s.total_ms = std::chrono::duration<double, std::milli>(t2 - t0).count();

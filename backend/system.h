@@ -59,6 +59,7 @@ struct FrameStats {
   bool loop_closed = false;  // The estimator corrected the trajectory with it.
   // The old keyframe's frame of the place recognised (measurement.loop->old_frame), when loop.
   std::optional<FrameId> loop_old_frame;
+  std::string loop_not_closed;  // EstimatorOutput::loop_not_closed.
   std::string note;  // The estimator's word on this frame ("initialising: <reason>"), if any.
   FrontendTimings frontend;
   double estimator_ms = 0;

@@ -143,8 +143,11 @@ nlohmann::json FrameJson(const FrameStats& s) {
           {"loop", s.loop},
           {"loop_closed", s.loop_closed},
           // The old keyframe's frame of the place recognised (null: no loop).
-          {"loop_old_frame", s.loop_old_frame ? nlohmann::json(s.loop_old_frame->value)
-                                              : nlohmann::json(nullptr)},
+          {"loop_old_frame",
+           s.loop_old_frame ? nlohmann::json(s.loop_old_frame->value) : nlohmann::json(nullptr)},
+          // Why the estimator did not close the frame's loop (null: closed, or no loop judged).
+          {"loop_not_closed",
+           s.loop_not_closed.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.loop_not_closed)},
           {"note", s.note},
           {"ms",
            {{"detect", s.frontend.detect_ms},
@@ -419,20 +422,21 @@ std::string EstimatorLimitNote(const System& system, const SystemOptions& option
          "this filter give it odometry (odometry.txt)";
 }
 
-// The loops the estimator did not close, and the first one's reason (its frame's note).
+// The loops the estimator judged and did not close, and the first one's reason.
 std::string LoopsNotClosedNote(const System& system) {
   int count = 0;
   const FrameStats* first = nullptr;
   for (const FrameStats& s : system.stats()) {
-    if (!s.loop || s.loop_closed) continue;
+    if (s.loop_not_closed.empty()) continue;
     ++count;
     if (!first) first = &s;
   }
   if (count == 0) return "";
   std::ostringstream os;
-  os << count << " not closed; the first at frame " << first->frame.value << ": "
-     << (first->note.empty() ? "no reason given" : first->note)
-     << (count > 1 ? " (the others: their frames' notes in report.json)" : "");
+  os << count << " not closed; the first, at frame " << first->frame.value << " to frame "
+     << (first->loop_old_frame ? std::to_string(first->loop_old_frame->value) : "?") << ": "
+     << first->loop_not_closed
+     << (count > 1 ? " (every one: loop_not_closed in report.json's frames)" : "");
   return os.str();
 }
 

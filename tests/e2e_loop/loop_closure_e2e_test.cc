@@ -27,7 +27,7 @@ struct LoopRun {
   int refused_loops_not_saved = 0;
   // Keyframes whose loop closed and whose place the old keyframe holds (no entry added).
   int closed_loops_holding_old_place = 0;
-  // Loops not closed whose frame's note does not say why.
+  // Loops not closed that do not say why (FrameStats::loop_not_closed).
   int refused_loops_without_reason = 0;
   // The fewest keyframes from one loop detected to the next (-1: fewer than two loops).
   int min_keyframes_between_loops = -1;
@@ -68,8 +68,7 @@ LoopRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& option
       }
       last_loop_keyframe = keyframes;
     }
-    run.refused_loops_without_reason +=
-        s.loop && !s.loop_closed && s.note.find(" not closed: ") == std::string::npos;
+    run.refused_loops_without_reason += s.loop && !s.loop_closed && s.loop_not_closed.empty();
     run.refused_loops_without_place += s.loop && !s.loop_closed && s.places == places;
     run.closed_loops_holding_old_place += s.loop_closed && s.places == places;
     if (s.loop && !s.loop_closed && s.valid) refused_with_pose.push_back(s.frame);

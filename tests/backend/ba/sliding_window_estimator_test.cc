@@ -193,6 +193,69 @@ TEST(SlidingWindowEstimatorTest, AFrameIsNotPlacedByTheLoopItsGateJudges) {
   EXPECT_TRUE(placed_by_loop.loop_closed);
 }
 
+// A loop at keyframe 12 to keyframe 2 that relabelled the frame's own points, all but 4, with
+// ids of keyframe 2's landmarks that are elsewhere (a look-alike match): nothing places the frame
+// in the old neighbourhood, the loop is refused, and the frame is placed by those points under
+// the ids they had before the loop; keyframe 12 observes them under those ids, and the note and
+// loop_not_closed say why the loop was not closed.
+TEST(SlidingWindowEstimatorTest, ARefusedLoopsFrameIsPlacedByItsPointsUnderTheirOwnIds) {
+  const MonoScene scene;
+  SlidingWindowEstimatorOptions options;
+  options.mono_init.next_frame_min_inlier_ratio = 0.0;  // Keyframe k is frame k (see above).
+  options.background_solve = false;
+  SlidingWindowEstimator estimator(scene.rig, options);
+  SlidingWindowEstimator without_loop(scene.rig, options);  // The same frames, no loop.
+  Pose T_w_11 = Pose::Identity();
+  for (int frame = 0; frame < 12; ++frame) {
+    estimator.Add(scene.Measure(frame));
+    T_w_11 = without_loop.Add(scene.Measure(frame)).T_w_c;
+  }
+  const Pose T_w_12 = without_loop.Add(scene.Measure(12)).T_w_c;
+  FrameMeasurement m = scene.Measure(12);
+  std::set<LandmarkId> in_frame;
+  for (const FeatureObservation& o : m.observations) in_frame.insert(o.landmark);
+  std::vector<LandmarkId> old_ids;  // Keyframe 2's mapped landmarks that frame 12 does not see.
+  for (const FeatureObservation& o : scene.Measure(2).observations) {
+    if (!in_frame.count(o.landmark) && estimator.ba().LandmarkPosition(o.landmark)) {
+      old_ids.push_back(o.landmark);
+    }
+  }
+  LoopDetection loop;
+  loop.old_frame = FrameId(2);
+  std::vector<LandmarkId> own_relabelled;
+  std::vector<FeatureObservation> observations;  // 4 of its own, then the relabelled ones.
+  for (FeatureObservation o : m.observations) {
+    if (!estimator.ba().LandmarkPosition(o.landmark)) continue;
+    if (observations.size() >= 4) {
+      if (loop.relabelled.size() == old_ids.size()) break;
+      own_relabelled.push_back(o.landmark);
+      loop.relabelled.emplace_back(o.landmark, old_ids[loop.relabelled.size()]);
+      o.landmark = loop.relabelled.back().second;
+    }
+    observations.push_back(o);
+  }
+  m.observations = observations;
+  ASSERT_GE(loop.relabelled.size(), 30u);
+  loop.inliers = static_cast<int>(loop.relabelled.size());
+  m.loop = loop;
+  const EstimatorOutput out = estimator.Add(m);
+  EXPECT_FALSE(out.loop_closed);
+  EXPECT_TRUE(out.loop_refused);
+  EXPECT_TRUE(out.valid) << out.note;
+  EXPECT_FALSE(out.loop_not_closed.empty());
+  EXPECT_NE(out.note.find("loop to frame 2 not closed: " + out.loop_not_closed), std::string::npos)
+      << out.note;
+  // Where the frame is without the loop (map units), within 2 % of the step from frame 11.
+  EXPECT_LT((out.T_w_c.translation() - T_w_12.translation()).norm(),
+            0.02 * (T_w_12.translation() - T_w_11.translation()).norm());
+  int observed = 0;
+  for (const LandmarkId id : own_relabelled) {
+    const std::vector<KeyframeId> seen = estimator.ba().ObservingKeyframes(id);
+    observed += std::count(seen.begin(), seen.end(), KeyframeId(12)) > 0;
+  }
+  EXPECT_GE(observed, static_cast<int>(own_relabelled.size()) * 9 / 10);
+}
+
 // Landmark fusion (SlidingWindowBa::FuseLandmarks) in the estimator: 120 tracks break at frame 8
 // and restart under new ids (id + 10000). With ba.fuse_radius_px the restarted id is merged into
 // the old one, and the later frames' observations under the new id reach the old landmark;
