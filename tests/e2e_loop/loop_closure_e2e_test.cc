@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/eval/evaluate.h"
 #include "core/sim/synthetic_sequence.h"
+#include "tests/small_loop_drive.h"
 #include "tests/test_util.h"
 
 namespace dala {
@@ -97,15 +98,7 @@ LoopRun RunSystem(const sim::SyntheticSequence& seq, const SystemOptions& option
 // recognised, the pose graph corrects the trajectory, and the ATE of the lap drops well below
 // the open-loop one.
 TEST(LoopClosureE2e, SmallLoopIsClosedAndAteDrops) {
-  sim::SimOptions sim;
-  sim.preset = "small_loop";
-  sim.fps = 3.0;
-  sim.frames = 160;  // One lap is 150 frames (0.83 m per frame).
-  sim.width = 480;
-  sim.height = 320;
-  sim.fx = sim.fy = 290.0;
-  sim.seed = 3;
-  const sim::SyntheticSequence seq(sim);
+  const sim::SyntheticSequence seq(SmallLoopAt3Hz(160));
   const LoopRun run = RunSystem(seq, SystemOptions());
   ASSERT_TRUE(run.eval.ok) << run.eval.error;
   ASSERT_GE(run.loops_detected, 1);
@@ -131,15 +124,7 @@ TEST(LoopClosureE2e, SmallLoopIsClosedAndAteDrops) {
 // (and the saved map's keyframes) nearly stop, the held keyframes leave the map once they have
 // left the window (culling), and the trajectory is as good as with an entry and a keyframe each.
 TEST(LoopClosureE2e, RevisitStoresNoNewPlacesAndCullsItsKeyframes) {
-  sim::SimOptions sim;
-  sim.preset = "small_loop";
-  sim.fps = 3.0;
-  sim.frames = 225;  // One lap is 150 frames.
-  sim.width = 480;
-  sim.height = 320;
-  sim.fx = sim.fy = 290.0;
-  sim.seed = 3;
-  const sim::SyntheticSequence seq(sim);
+  const sim::SyntheticSequence seq(SmallLoopAt3Hz(225));
   struct Variant {
     bool one_per_place, cull;
     double ate = 0;

@@ -11,6 +11,7 @@
 
 #include "core/sim/synthetic_sequence.h"
 #include "frontend/frontend.h"
+#include "tests/small_loop_drive.h"
 
 namespace dala {
 namespace {
@@ -22,15 +23,7 @@ int CountIds(const FrameMeasurement& m, const std::set<LandmarkId>& ids) {
 }
 
 TEST(ReturnLoopIds, TheNextFramesTrackThePointsUnderTheirIdsBeforeTheLoop) {
-  sim::SimOptions sim;
-  sim.preset = "small_loop";
-  sim.fps = 3.0;
-  sim.frames = 160;  // One lap is 150 frames (0.83 m per frame).
-  sim.width = 480;
-  sim.height = 320;
-  sim.fx = sim.fy = 290.0;
-  sim.seed = 3;
-  const sim::SyntheticSequence seq(sim);
+  const sim::SyntheticSequence seq(SmallLoopAt3Hz(160));
   Frontend returned(seq.rig(), FrontendOptions());
   Frontend kept(seq.rig(), FrontendOptions());
   std::optional<LoopDetection> loop;
