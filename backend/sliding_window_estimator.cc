@@ -749,11 +749,6 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
   // keeps those points under the ids the current map knows them by (`before_loop`; the frontend
   // gives them back too: Frontend::ReturnLoopIds), so that the refusal costs it nothing.
   const bool mono_loop = !stereo && !first && m.is_keyframe && m.loop && options_.loop.enable;
-  // (The frontend's ids: landmark fusion renames them after the ids before the loop are back.)
-  const FrameMeasurement before_loop = !mono_loop ? FrameMeasurement()
-                                       : fused_into_.empty()
-                                           ? WithIdsBeforeLoop(m)
-                                           : WithFusedIds(WithIdsBeforeLoop(measurement));
   if (mono_loop) {
     for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.insert(ids.second);
   }
@@ -831,23 +826,28 @@ EstimatorOutput SlidingWindowEstimator::Add(const FrameMeasurement& measurement)
       for (const auto& ids : m.loop->relabelled) unconfirmed_loop_landmarks_.erase(ids.second);
     }
     out.loop_refused = !out.loop_closed;
-    // Refused where the frame's other points could not place it against the window (the loop
-    // relabelled most of its mapped ones): placed by all of them under their current ids,
-    // rather than by the PnP recovery or the bridge, or not at all.
-    if (out.loop_refused && !placed_by_window && !resumed) {
-      const std::vector<BaObservation> mapped = WindowObservations(before_loop);
-      const PoseOnlyResult r = ba_.TrackFrame(mapped, T_w_predicted, options_.pose_only);
-      if (r.status == PoseOnlyStatus::kOk) {
-        T_w_c = r.T_w_c;
-        out.valid = true;
-        out.note.clear();  // Why it was lost, or how it was bridged.
-        bridged_from.reset();
-        if (recovered_here) relocalised_ = false;
-      }
+  }
+  // What the frame keeps: the old ids where its loop closed, the current map's where it did not
+  // (the frontend's ids: landmark fusion renames them after the ids before the loop are back).
+  const FrameMeasurement before_loop = !out.loop_refused ? FrameMeasurement()
+                                       : fused_into_.empty()
+                                           ? WithIdsBeforeLoop(m)
+                                           : WithFusedIds(WithIdsBeforeLoop(measurement));
+  const FrameMeasurement& kept = out.loop_refused ? before_loop : m;
+  // Refused where the frame's other points could not place it against the window (the loop
+  // relabelled most of its mapped ones): placed by all of them under their current ids, rather
+  // than by the PnP recovery or the bridge, or not at all.
+  if (out.loop_refused && !placed_by_window && !resumed) {
+    const std::vector<BaObservation> mapped = WindowObservations(before_loop);
+    const PoseOnlyResult r = ba_.TrackFrame(mapped, T_w_predicted, options_.pose_only);
+    if (r.status == PoseOnlyStatus::kOk) {
+      T_w_c = r.T_w_c;
+      out.valid = true;
+      out.note.clear();  // Why it was lost, or how it was bridged.
+      bridged_from.reset();
+      if (recovered_here) relocalised_ = false;
     }
   }
-  // What the frame keeps: the old ids where its loop closed, the current map's where it did not.
-  const FrameMeasurement& kept = mono_loop && !out.loop_closed ? before_loop : m;
   // A mono keyframe needs a tracked pose (see the class comment).
   const bool new_keyframe = first || (m.is_keyframe && (stereo || out.valid));
   if (new_keyframe && out.valid && relocalised_) {

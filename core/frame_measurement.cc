@@ -1,7 +1,5 @@
 #include "core/frame_measurement.h"
 
-#include <unordered_map>
-
 namespace dala {
 
 const char* TrackingStatusName(TrackingStatus status) {
@@ -13,11 +11,16 @@ const char* TrackingStatusName(TrackingStatus status) {
   return "?";
 }
 
+std::unordered_map<LandmarkId, LandmarkId> IdsBeforeLoop(const LoopDetection& loop) {
+  std::unordered_map<LandmarkId, LandmarkId> before;
+  for (const auto& [cur, old] : loop.relabelled) before[old] = cur;
+  return before;
+}
+
 FrameMeasurement WithIdsBeforeLoop(const FrameMeasurement& m) {
   FrameMeasurement out = m;
   if (!m.loop) return out;
-  std::unordered_map<LandmarkId, LandmarkId> before;  // Old id -> the id before the loop.
-  for (const auto& [cur, old] : m.loop->relabelled) before[old] = cur;
+  const std::unordered_map<LandmarkId, LandmarkId> before = IdsBeforeLoop(*m.loop);
   for (FeatureObservation& o : out.observations) {
     const auto it = before.find(o.landmark);
     if (it != before.end()) o.landmark = it->second;

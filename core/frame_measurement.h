@@ -5,12 +5,12 @@
 // frontend fills it; estimators (sliding-window BA, stereo EKF, mono EKF) read it and nothing
 // else, so they are compared on identical measurements.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <optional>
+#include <unordered_map>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/geometry.h"
 #include "core/types.h"
@@ -115,6 +115,9 @@ inline bool PlaceReleasedByRefusedLoop(const FrameMeasurement& m, bool loop_refu
   return loop_refused && m.loop && !m.loop->relabelled.empty() &&
          m.place_held_by == m.loop->old_frame;
 }
+
+// The loop's relabelling undone: each old landmark id it gave -> the id the point had before.
+std::unordered_map<LandmarkId, LandmarkId> IdsBeforeLoop(const LoopDetection& loop);
 
 // m with the points its loop relabelled under the ids they had before the loop (the current
 // map's landmarks): what the frame observes if the loop is not closed. m itself without a loop.

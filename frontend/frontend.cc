@@ -421,8 +421,7 @@ std::optional<LoopDetection> Frontend::DetectLoop(const Frame& frame,
 void Frontend::ReturnLoopIds(const LoopDetection& loop) {
   place_recognition_.LoopNotClosed();
   if (!prev_ || loop.relabelled.empty()) return;
-  std::unordered_map<LandmarkId, LandmarkId> before;  // Old id -> the id before the loop.
-  for (const auto& [cur, old] : loop.relabelled) before[old] = cur;
+  const std::unordered_map<LandmarkId, LandmarkId> before = IdsBeforeLoop(loop);
   const FrameId frame = prev_->id;
   const auto give_back = [&](TrackedFrame* f) {
     if (f && f->id == frame) RenameLandmarkIds(before, &f->landmark);
