@@ -2,7 +2,7 @@
 // uses one DECLAREs it and mentions it in its usage text; `dala CMD --help` then lists it.
 #include <gflags/gflags.h>
 
-DEFINE_string(out, "", "output path: a folder (synth, run, bench) or an image file (match)");
+DEFINE_string(out, "", "output path: a folder (synth, run, bench, fuse) or an image file (match)");
 DEFINE_bool(json, false, "print one JSON object on stdout instead of the human-readable text");
 DEFINE_double(fps, 0.0,
               "frame rate (Hz). synth: of the rendering (0: 10 Hz); run: gives frame i of an "
