@@ -145,7 +145,7 @@ const CommandRegistrar registrar(
      "  for k in 0 1 2; do dala run DATA --mode mono --set ransac_order_seed=$k --out runs/$k; "
      "done\n"
      "  dala fuse runs/0 runs/1 runs/2 --out runs/fused\n"
-     "  dala eval DATA/poses.txt runs/fused/trajectory_kitti.txt --align sim3",
+     "  dala eval DATA/poses.txt runs/fused/trajectory.txt --times DATA/times.txt --align sim3",
      &RunFuse, __FILE__});
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "backend/system.h"
 #include "core/eval/evaluate.h"
 #include "core/eval/scale_along_path.h"
+#include "core/eval/trajectory_fusion.h"
 #include "core/io/dataset.h"
 #include "core/sim/synthetic_sequence.h"
 #include "tests/test_util.h"
@@ -24,6 +25,8 @@ namespace {
 // docs/results.md.
 constexpr double kRoverAtePercentBest = 0.0598;        // 0.0168 m over 28.0 m.
 constexpr double kBlackAtePercentBest = 0.0830;
+// Three draws of the rover stretch fused: 0.0124 m (draws 0.0251, 0.0127, 0.0102 m).
+constexpr double kRoverFusedAtePercentBest = 0.0441;
 constexpr double kKittiAteMetresBest = 0.0308;
 // Median of draws 0-2; without relocalisation (draw 0) 0.0541 %.
 constexpr double kStereoBlackAtePercentBest = 0.0378;
@@ -113,6 +116,39 @@ TEST(MonoE2e, RoverStretchMonoBa) {
             << " %), first pose at frame " << run.first_pose << std::endl;
   testing::ExpectWithinBound("ba/mono Sim(3) ATE / path, rover 150 frames", 100 * fraction,
                              kRoverAtePercentBest, "%");
+}
+
+// Three RANSAC draws of the rover stretch fused (`dala fuse`, core/eval/trajectory_fusion.h):
+// the fused trajectory gives every frame a pose, is no farther from the truth than the worst of
+// its runs, and stays within its bound.
+TEST(MonoE2e, ThreeDrawsFusedAreNoWorseThanTheirWorst) {
+  const sim::SyntheticSequence seq(Preset("rover_loop", 150));
+  SystemOptions options = MonoBa();
+  std::vector<Trajectory> runs;
+  double worst = 0.0;
+  for (uint64_t draw = 0; draw < 3; ++draw) {
+    options.ransac_order_seed = draw;
+    const MonoRun run = RunRendered(seq, options);
+    ASSERT_TRUE(run.eval.ok) << run.eval.error;
+    std::cout << "[ measured ] ba/mono rover 150 frames, draw " << draw << ": Sim(3) ATE "
+              << run.eval.ate.translation.rmse << " m" << std::endl;
+    worst = std::max(worst, run.eval.ate.translation.rmse);
+    runs.push_back(run.trajectory);
+  }
+  FusedTrajectory fused;
+  std::string why;
+  ASSERT_TRUE(FuseTrajectories(runs, TrajectoryFusionOptions(), &fused, &why)) << why;
+  EXPECT_EQ(fused.trajectory.size(), seq.size());
+  EvalOptions eval;
+  eval.alignment = AlignmentType::kSim3;
+  const EvalResult result = Evaluate(seq.ground_truth(), fused.trajectory, eval);
+  ASSERT_TRUE(result.ok) << result.error;
+  const double fused_ate = result.ate.translation.rmse;
+  std::cout << "[ measured ] ba/mono rover 150 frames, the three draws fused: Sim(3) ATE "
+            << fused_ate << " m" << std::endl;
+  EXPECT_LE(fused_ate, worst);
+  testing::ExpectWithinBound("ba/mono Sim(3) ATE / path, rover 150 frames, 3 draws fused",
+                             100 * fused_ate / seq.PathLength(), kRoverFusedAtePercentBest, "%");
 }
 
 // The fast preset's first 200 frames rendered with `seed`, run with one camera; the frames
