@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/eval/statistics.h"
 #include "core/eval/trajectory_fusion.h"
 #include "core/io/atomic_file.h"
 #include "core/io/trajectory_io.h"
@@ -60,13 +61,6 @@ RunInput ReadRunInput(const std::string& path) {
   return input;
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 int RunFuse(const std::vector<std::string>& args) {
   if (args.size() < 2) {
     throw Error() << "expected at least 2 runs (folders of `dala run` or trajectory files), got "
@@ -98,9 +92,7 @@ int RunFuse(const std::vector<std::string>& args) {
   WriteTrajectoryKitti(kitti, fused.trajectory);
   const int all_runs = static_cast<int>(runs.size());
   const int in_all = static_cast<int>(std::count(fused.runs.begin(), fused.runs.end(), all_runs));
-  const double spread_median = Median(fused.spread);
-  const double spread_max =
-      fused.spread.empty() ? 0.0 : *std::max_element(fused.spread.begin(), fused.spread.end());
+  const ErrorStatistics spread = ComputeStatistics(fused.spread);
   nlohmann::json per_run = nlohmann::json::array();
   for (size_t k = 0; k < runs.size(); ++k) {
     per_run.push_back({{"path", args[k]},
@@ -115,14 +107,14 @@ int RunFuse(const std::vector<std::string>& args) {
                                  // aligned positions from the mean (the first run's unit).
                                  {"runs_per_pose", fused.runs},
                                  {"spread", fused.spread},
-                                 {"spread_median", spread_median},
-                                 {"spread_max", spread_max}};
+                                 {"spread_median", spread.median},
+                                 {"spread_max", spread.max}};
   WriteFileAtomically(FLAGS_out + "/fusion.json",
                       [&](std::ostream& os) { os << report.dump(1) << "\n"; });
   std::cout << "fused       " << runs.size() << " runs, " << fused.trajectory.size() << " poses ("
             << in_all << " in every run), aligned by " << AlignmentTypeName(options.alignment)
             << "\n"
-            << "spread      " << std::setprecision(3) << spread_median << " median, " << spread_max
+            << "spread      " << std::setprecision(3) << spread.median << " median, " << spread.max
             << " max (RMS distance of the runs' positions from the mean, in the "
             << "first run's unit)\n"
             << "written     " << tum << ", " << kitti << ", " << FLAGS_out << "/fusion.json\n";

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "core/eval/alignment.h"
 #include "core/geometry.h"
 #include "core/trajectory.h"
 
@@ -18,6 +19,17 @@ inline Trajectory HelixTrajectory(int n, int64_t t0_ns = 1000000000LL) {
     t.Add(t0_ns + i * 100000000LL, MakePose(R, p));
   }
   return t;
+}
+
+// The trajectory in another world and unit, p -> s R p + t with R = Exp(rotvec) (a monocular
+// run's own frame; orientations turn by R).
+inline Trajectory Transformed(const Trajectory& in, double s, const Eigen::Vector3d& rotvec,
+                              const Eigen::Vector3d& t) {
+  Sim3Alignment S;
+  S.scale = s;
+  S.T_g_e.linear() = ExpSO3(rotvec);
+  S.T_g_e.translation() = t;
+  return AlignTrajectory(in, S);
 }
 
 }  // namespace dala::testing

@@ -13,16 +13,6 @@
 namespace dala {
 namespace {
 
-// The trajectory under p -> s R p + t (a run's own world and unit).
-Trajectory Transformed(const Trajectory& in, double s, const Eigen::Vector3d& rotvec,
-                       const Eigen::Vector3d& t) {
-  Sim3Alignment S;
-  S.scale = s;
-  S.T_g_e.linear() = ExpSO3(rotvec);
-  S.T_g_e.translation() = t;
-  return AlignTrajectory(in, S);
-}
-
 // RMS position error of `est` after its best Sim(3) onto `truth` (same stamps, same order).
 double SimilarityAte(const Trajectory& truth, const Trajectory& est) {
   std::vector<Eigen::Vector3d> p_e, p_g;
@@ -41,8 +31,8 @@ double SimilarityAte(const Trajectory& truth, const Trajectory& est) {
 TEST(FuseTrajectories, OneRunSeenInThreeWorldsFusesToTheFirst) {
   const Trajectory truth = testing::HelixTrajectory(60);
   const std::vector<Trajectory> runs = {truth,
-                                        Transformed(truth, 2.5, {0.3, -0.2, 1.0}, {4, -1, 2}),
-                                        Transformed(truth, 0.4, {-1.2, 0.5, 0.1}, {-3, 0, 7})};
+                                        testing::Transformed(truth, 2.5, {0.3, -0.2, 1.0}, {4, -1, 2}),
+                                        testing::Transformed(truth, 0.4, {-1.2, 0.5, 0.1}, {-3, 0, 7})};
   FusedTrajectory fused;
   std::string why;
   ASSERT_TRUE(FuseTrajectories(runs, TrajectoryFusionOptions(), &fused, &why)) << why;
@@ -83,7 +73,7 @@ TEST(FuseTrajectories, TheMeanOfRunsWithIndependentErrorsIsNearerTheTruth) {
     const double ate = SimilarityAte(truth, run);
     worst_run = std::max(worst_run, ate);
     best_run = std::min(best_run, ate);
-    runs.push_back(Transformed(run, 0.5 + 0.3 * k, {0.2 * k, -0.1, 0.4}, {1.0 * k, 2.0 * k, -1.0}));
+    runs.push_back(testing::Transformed(run, 0.5 + 0.3 * k, {0.2 * k, -0.1, 0.4}, {1.0 * k, 2.0 * k, -1.0}));
   }
   FusedTrajectory fused;
   std::string why;
