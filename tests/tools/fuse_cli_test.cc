@@ -36,8 +36,10 @@ class FuseCli : public ::testing::Test {
 // first run, and the report says which alignment and how far apart the runs were.
 TEST_F(FuseCli, OneCameraRunsFuseBySimilarity) {
   WriteRunFolder(dir_ / "r0", truth_, "arbitrary (monocular)");
-  WriteRunFolder(dir_ / "r1", testing::Transformed(truth_, 3.0, {0.1, -0.3, 0.7}, {1, 2, 3}), "arbitrary (monocular)");
-  WriteTrajectoryTum(dir_ / "r2.txt", testing::Transformed(truth_, 0.5, {0.1, -0.3, 0.7}, {-4, 0, 1}));  // A file, not a folder.
+  WriteRunFolder(dir_ / "r1", testing::Transformed(truth_, 3.0, {0.1, -0.3, 0.7}, {1, 2, 3}),
+                 "arbitrary (monocular)");
+  WriteTrajectoryTum(dir_ / "r2.txt", testing::Transformed(truth_, 0.5, {0.1, -0.3, 0.7},
+                                                           {-4, 0, 1}));  // A file, not a folder.
   const auto r = testing::RunDala("fuse " + dir_ / "r0" + " " + dir_ / "r1" + " " +
                                       dir_ / "r2.txt" + " --out " + dir_ / "fused",
                                   dir_ / "log");
@@ -62,7 +64,8 @@ TEST_F(FuseCli, OneCameraRunsFuseBySimilarity) {
 // stays at that scale in the mean.
 TEST_F(FuseCli, MetricRunsFuseRigidly) {
   WriteRunFolder(dir_ / "s0", truth_, "metric (stereo)");
-  WriteRunFolder(dir_ / "s1", testing::Transformed(truth_, 1.02, {0.1, -0.3, 0.7}, {0, 0, 0}), "metric (stereo)");
+  WriteRunFolder(dir_ / "s1", testing::Transformed(truth_, 1.02, {0.1, -0.3, 0.7}, {0, 0, 0}),
+                 "metric (stereo)");
   const auto r = testing::RunDala(
       "fuse " + dir_ / "s0" + " " + dir_ / "s1" + " --out " + dir_ / "fused", dir_ / "log");
   ASSERT_EQ(r.status, 0) << r.log();

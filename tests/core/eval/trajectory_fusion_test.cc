@@ -30,9 +30,9 @@ double SimilarityAte(const Trajectory& truth, const Trajectory& est) {
 
 TEST(FuseTrajectories, OneRunSeenInThreeWorldsFusesToTheFirst) {
   const Trajectory truth = testing::HelixTrajectory(60);
-  const std::vector<Trajectory> runs = {truth,
-                                        testing::Transformed(truth, 2.5, {0.3, -0.2, 1.0}, {4, -1, 2}),
-                                        testing::Transformed(truth, 0.4, {-1.2, 0.5, 0.1}, {-3, 0, 7})};
+  const std::vector<Trajectory> runs = {
+      truth, testing::Transformed(truth, 2.5, {0.3, -0.2, 1.0}, {4, -1, 2}),
+      testing::Transformed(truth, 0.4, {-1.2, 0.5, 0.1}, {-3, 0, 7})};
   FusedTrajectory fused;
   std::string why;
   ASSERT_TRUE(FuseTrajectories(runs, TrajectoryFusionOptions(), &fused, &why)) << why;
@@ -73,7 +73,8 @@ TEST(FuseTrajectories, TheMeanOfRunsWithIndependentErrorsIsNearerTheTruth) {
     const double ate = SimilarityAte(truth, run);
     worst_run = std::max(worst_run, ate);
     best_run = std::min(best_run, ate);
-    runs.push_back(testing::Transformed(run, 0.5 + 0.3 * k, {0.2 * k, -0.1, 0.4}, {1.0 * k, 2.0 * k, -1.0}));
+    runs.push_back(
+        testing::Transformed(run, 0.5 + 0.3 * k, {0.2 * k, -0.1, 0.4}, {1.0 * k, 2.0 * k, -1.0}));
   }
   FusedTrajectory fused;
   std::string why;
