@@ -277,8 +277,7 @@ void System::SaveMap(const std::string& path) const {
   const std::vector<MapPoint> points = estimator_->map();
   PruneKeyframeRecords(points);
   RefreshKeyframePoses();
-  SavedMap map = MapWithoutKeyframes(keyframe_records_, points, options_,
-                                     ScaleDescription().rfind("metric", 0) == 0);
+  SavedMap map = MapWithoutKeyframes(keyframe_records_, points, options_, IsMetric());
   if (std::count(keyframe_has_pose_.begin(), keyframe_has_pose_.end(), false) > 0) {
     // Some keyframes have no pose (mono before its initialisation): write a copy without them.
     WriteMapFile(path, map, keyframes());
@@ -286,6 +285,8 @@ void System::SaveMap(const std::string& path) const {
     WriteMapFile(path, map, keyframe_records_);
   }
 }
+
+bool System::IsMetric() const { return ScaleDescription().rfind("metric", 0) == 0; }
 
 SavedMap System::LoadMap(const std::string& path) { return ReadMapFile(path); }
 

@@ -135,6 +135,8 @@ class System {
   // or "arbitrary (monocular)" (one camera: the unit is the first two-view baseline; align with
   // Sim(3) to compare with a metric ground truth).
   std::string ScaleDescription() const;
+  // The map's unit is the metre (ScaleDescription() starts with "metric").
+  bool IsMetric() const;
   const Estimator& estimator() const { return *estimator_; }
 
   // The saved keyframes (keyframes(), SaveMap) older than kRecordPruneAge keyframes keep only

@@ -8,18 +8,20 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
 #include <sstream>
-
-#include <nlohmann/json.hpp>
+#include <thread>
 
 #include "backend/system.h"
+#include "backend/system_ensemble.h"
 #include "core/error.h"
 #include "core/eval/alignment.h"
 #include "core/eval/evaluate.h"
 #include "core/eval/plot.h"
 #include "core/eval/scale_along_path.h"
+#include "core/eval/statistics.h"
 #include "core/io/atomic_file.h"
 #include "core/io/dataset.h"
 #include "core/io/ply_writer.h"
@@ -64,6 +66,12 @@ DEFINE_string(video, "",
               "run: also write FILE.mp4, a video of what the frontend saw: each frame with its "
               "tracked points by track age, stereo matches, state, keyframe flag and the path so "
               "far from above (docs/pipeline.md; off when empty)");
+
+DEFINE_int32(draws, 1,
+             "run: run the pipeline N times over the frames, with the RANSAC draws "
+             "ransac_order_seed + 0..N-1, and write their fused trajectory (docs/evaluation.md, "
+             "\"Several draws in one run\"); N times the work");
+DEFINE_int32(threads, 0, "run: threads that step the --draws (0: one per core, at most N)");
 
 DEFINE_string(map, "",
               "run: start in the saved map FILE (the map.dmap of an earlier run): frames are "
@@ -221,7 +229,7 @@ struct FramesRun {
   std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
 };
 
-FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& stop,
+FramesRun TrackEveryFrame(Dataset* dataset, SystemEnsemble* runs, const StopSignal& stop,
                           report::FrameVideo* video) {
   FramesRun run;
   Progress progress(dataset->size(), FLAGS_progress);
@@ -232,14 +240,14 @@ FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& st
   while (!stop.received()) {
     try {
       if (!dataset->Next(&frame)) break;
-      last = system->Track(frame);
+      last = runs->Track(frame);
       if (video != nullptr) {
-        video->Add(frame.left, system->last_measurement(), system->stats().back(),
+        video->Add(frame.left, runs->first().last_measurement(), runs->first().stats().back(),
                    last.valid ? std::optional<Pose>(last.T_w_c) : std::nullopt);
       }
     } catch (const FrameError& e) {
       if (FLAGS_strict) throw;
-      if (system->stats().empty()) {
+      if (runs->first().stats().empty()) {
         throw Error() << e.message() << "; the first frame of the run cannot be skipped: "
                       << "restore it, or start after it with --first_frame " << e.frame().value + 1;
       }
@@ -252,7 +260,7 @@ FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& st
         progress.Say("[run] warning: more frames skipped, not listed here (report.json marks "
                      "every one \"skipped\")\n");
       }
-      system->SkipFrame(e.frame(), e.t_ns(), "skipped: " + e.message());
+      runs->SkipFrame(e.frame(), e.t_ns(), "skipped: " + e.message());
       last.status = TrackingStatus::kLost;
     }
     ++run.done;
@@ -271,21 +279,104 @@ FramesRun TrackEveryFrame(Dataset* dataset, System* system, const StopSignal& st
   return run;
 }
 
-// The global refinement of the whole run (the BA estimator's global bundle adjustment,
-// ba.final_ba); not after an interruption: the user asked to stop.
-RefinementSummary Refine(System* system, const FramesRun& run, const SystemOptions& options) {
-  RefinementSummary refinement;
+// The global refinement of the whole run, every draw (the BA estimator's global bundle
+// adjustment, ba.final_ba); not after an interruption: the user asked to stop.
+std::vector<RefinementSummary> Refine(SystemEnsemble* runs, const FramesRun& run,
+                                      const SystemOptions& options) {
   if (run.signal != 0) {
+    RefinementSummary refinement;
     refinement.report = "not run: the run was interrupted";
-    return refinement;
+    return std::vector<RefinementSummary>(runs->size(), refinement);
   }
-  refinement = system->Finish();
+  const std::vector<RefinementSummary> refinements = runs->Finish();
   if (options.estimator == "ba") {
-    std::cerr << "[run] " << refinement.report;
-    if (refinement.done) std::cerr << ", " << refinement.time_s << " s";
-    std::cerr << "\n";
+    for (int k = 0; k < runs->size(); ++k) {
+      std::cerr << "[run] ";
+      if (runs->size() > 1) std::cerr << "draw " << runs->seed(k) << ": ";
+      std::cerr << refinements[k].report;
+      if (refinements[k].done) std::cerr << ", " << refinements[k].time_s << " s";
+      std::cerr << "\n";
+    }
   }
-  return refinement;
+  return refinements;
+}
+
+// --draws N: the trajectory written is the draws' fusion (SystemEnsemble::Fuse), in the world
+// and unit of the first draw that has one (the reference: its map, report and per-frame
+// statistics are the ones written).
+struct DrawsResult {
+  int reference = 0;
+  std::vector<int> fused_draws;  // The draws fused (with a pose at 3 frames or more).
+  FusedTrajectory fused;
+  std::string not_fused;  // Why the draws could not be fused (empty: fused, or one draw).
+  Trajectory trajectory, online_trajectory;
+};
+
+DrawsResult FuseDraws(const SystemEnsemble& runs, const std::vector<Trajectory>& final_runs,
+                      const std::vector<Trajectory>& online_runs) {
+  DrawsResult r;
+  r.fused_draws = runs.FusableDraws(final_runs);
+  if (!r.fused_draws.empty()) r.reference = r.fused_draws.front();
+  r.trajectory = final_runs[r.reference];
+  r.online_trajectory = online_runs[r.reference];
+  if (runs.size() == 1 || r.fused_draws.size() < 2) return r;
+  if (!runs.Fuse(final_runs, r.fused_draws, &r.fused, &r.not_fused)) {
+    r.fused_draws = {r.reference};
+    return r;
+  }
+  r.trajectory = r.fused.trajectory;
+  FusedTrajectory online;
+  std::string why;
+  if (runs.Fuse(online_runs, r.fused_draws, &online, &why)) {
+    r.online_trajectory = online.trajectory;
+  } else {
+    std::cerr << "[run] warning: the draws' online trajectories cannot be fused (" << why
+              << "): trajectory_online.txt is draw " << runs.seed(r.reference) << "'s\n";
+  }
+  return r;
+}
+
+// summary.draws: each draw's seed, poses, ATE (with ground truth) and scale onto the fused
+// trajectory, and the draws' spread around it.
+nlohmann::json DrawsJson(const SystemEnsemble& runs, const std::vector<Trajectory>& final_runs,
+                         const DrawsResult& draws, const Dataset& dataset,
+                         const SystemOptions& options, int threads) {
+  nlohmann::json per_draw = nlohmann::json::array();
+  const auto& gt = dataset.ground_truth();
+  EvalOptions eval;
+  eval.alignment = options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
+  for (int k = 0; k < runs.size(); ++k) {
+    nlohmann::json d = {{"seed", runs.seed(k)}, {"frames_with_pose", final_runs[k].size()}};
+    std::optional<double> ate;
+    if (gt && !gt->empty() && !final_runs[k].empty()) {
+      const EvalResult result = Evaluate(*gt, final_runs[k], eval);
+      if (result.ok) ate = result.ate.translation.rmse;
+    }
+    d["ate_rmse"] = JsonOrNull(ate);
+    const auto fused_at = std::find(draws.fused_draws.begin(), draws.fused_draws.end(), k) -
+                          draws.fused_draws.begin();
+    const bool fused = draws.not_fused.empty() && draws.fused_draws.size() > 1 &&
+                       fused_at < static_cast<long>(draws.fused_draws.size());
+    d["fused"] = fused;
+    d["scale_onto_fused"] = JsonOrNull(
+        fused ? std::optional<double>(draws.fused.alignments[fused_at].scale) : std::nullopt);
+    per_draw.push_back(d);
+  }
+  const bool fused = draws.not_fused.empty() && draws.fused_draws.size() > 1;
+  const ErrorStatistics spread =
+      ComputeStatistics(fused ? draws.fused.spread : std::vector<double>());
+  return {{"count", runs.size()},
+          {"threads", threads},
+          {"reference_seed", runs.seed(draws.reference)},
+          {"fused", fused ? static_cast<int>(draws.fused_draws.size()) : 0},
+          {"alignment", AlignmentTypeName(runs.FusionAlignment())},
+          {"not_fused",
+           draws.not_fused.empty() ? nlohmann::json(nullptr) : nlohmann::json(draws.not_fused)},
+          // RMS distance of the fused draws' aligned positions from their mean, per frame (the
+          // reference's unit).
+          {"spread_median", fused ? nlohmann::json(spread.median) : nlohmann::json(nullptr)},
+          {"spread_max", fused ? nlohmann::json(spread.max) : nlohmann::json(nullptr)},
+          {"per_draw", per_draw}};
 }
 
 // Writing the outputs: each file is written to a temporary and renamed, so none is ever half
@@ -440,6 +531,39 @@ std::string LoopsNotClosedNote(const System& system) {
   return os.str();
 }
 
+// --draws: what was fused, the draws' spread and each one's ATE.
+void PrintDraws(const nlohmann::json& draws, std::ostream& out) {
+  const nlohmann::json& per_draw = draws["per_draw"];
+  const int fused = draws["fused"].get<int>();
+  out << "draws       " << per_draw.size() << " runs (ransac_order_seed "
+      << per_draw.front()["seed"].get<uint64_t>() << "-" << per_draw.back()["seed"].get<uint64_t>()
+      << "); ";
+  if (fused > 1) {
+    out << fused << " fused by " << draws["alignment"].get<std::string>() << " into draw "
+        << draws["reference_seed"].get<uint64_t>() << "'s world: spread " << std::setprecision(3)
+        << draws["spread_median"].get<double>() << " median, " << draws["spread_max"].get<double>()
+        << " max (RMS distance of the draws from their mean)\n";
+  } else if (!draws["not_fused"].is_null()) {
+    out << "not fused: " << draws["not_fused"].get<std::string>() << "; the trajectory is draw "
+        << draws["reference_seed"].get<uint64_t>() << "'s\n";
+  } else {
+    out << "not fused: fewer than two draws have a trajectory; the trajectory is draw "
+        << draws["reference_seed"].get<uint64_t>() << "'s\n";
+  }
+  bool any_ate = false;
+  for (const auto& d : per_draw) any_ate = any_ate || !d["ate_rmse"].is_null();
+  if (!any_ate) return;
+  out << "            ATE per draw";
+  for (const auto& d : per_draw) {
+    if (d["ate_rmse"].is_null()) {
+      out << " -";
+    } else {
+      out << " " << std::fixed << std::setprecision(4) << d["ate_rmse"].get<double>();
+    }
+  }
+  out << " m (each alone; draws/seed_K.txt)\n";
+}
+
 // The summary `dala run` prints (and report.html shows).
 void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::json& summary,
                   const RefinementSummary& refinement, size_t frames_with_pose,
@@ -474,12 +598,23 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
       << (c.keyframes_in_map >= 0 ? ", " + std::to_string(c.keyframes_in_map) + " in the map"
                                   : std::string())
       << ", " << system.places() << " places stored (memory.png)\n";
+  const nlohmann::json* draws = summary.contains("draws") ? &summary["draws"] : nullptr;
   out << "time        " << std::fixed << std::setprecision(1) << Percentile(c.total_ms, 0.5)
-      << " ms median per frame, " << summary["fps"].get<double>() << " fps\n";
+      << " ms median per frame, " << summary["fps"].get<double>() << " fps";
+  if (draws != nullptr) {
+    out << " (" << (*draws)["count"].get<int>() << " draws on " << (*draws)["threads"].get<int>()
+        << ((*draws)["threads"].get<int>() > 1 ? " threads)" : " thread)");
+  }
+  out << "\n";
+  if (draws != nullptr) PrintDraws(*draws, out);
   if (summary.contains("ate")) {
     out << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>() << " m ("
         << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
-        << (refinement.done ? ", after the global BA" : "") << ")\n";
+        << (refinement.done ? ", after the global BA" : "")
+        << (draws != nullptr && (*draws)["fused"].get<int>() > 1
+                ? ", the " + std::to_string((*draws)["fused"].get<int>()) + " draws fused"
+                : std::string())
+        << ")\n";
     if (summary.contains("online") && summary["online"].contains("ate")) {
       out << "ATE online  " << std::setprecision(4)
           << summary["online"]["ate"]["rmse"].get<double>()
@@ -504,7 +639,8 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
   }
   out << "results in  " << dir << "/ (trajectory.txt, trajectory_kitti.txt, map.ply, "
       << "map.dmap, report.json, report.html, memory.png" << (plotted ? ", trajectory.png" : "")
-      << (refinement.done ? ", trajectory_online.txt" : "") << ")\n";
+      << (refinement.done ? ", trajectory_online.txt" : "")
+      << (draws != nullptr ? ", draws/seed_K.txt" : "") << ")\n";
 }
 
 // trajectory.txt (TUM), trajectory_online.txt (before the refinement, when there was one),
@@ -604,13 +740,24 @@ int RunRun(const std::vector<std::string>& args) {
                   << " arguments; usage: dala run DATASET --out DIR";
   }
   if (FLAGS_out.empty()) throw Error() << "--out DIR is required (where the results go)";
+  if (FLAGS_draws < 1) {
+    throw Error() << "--draws " << FLAGS_draws << ": give 1 (one run, the default) or more";
+  }
+  if (FLAGS_threads < 0)
+    throw Error() << "--threads " << FLAGS_threads << ": give 0 (one per core) or more";
   std::unique_ptr<Dataset> dataset = OpenDataset(args[0], DatasetOptionsFromFlags(options));
   CreateDirectories(FLAGS_out);
 
-  System system(dataset->rig(), options);
+  SystemEnsembleOptions ensemble_options;
+  ensemble_options.draws = FLAGS_draws;
+  ensemble_options.threads = std::min(
+      FLAGS_draws, FLAGS_threads > 0
+                       ? FLAGS_threads
+                       : std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+  SystemEnsemble runs(dataset->rig(), options, ensemble_options);
   if (!FLAGS_map.empty()) {
     const SavedMap saved = System::LoadMap(FLAGS_map);
-    system.UseMap(saved);
+    runs.UseMap(saved);
     std::cerr << "[run] starting in the saved map " << FLAGS_map << " ("
               << saved.keyframes.size() << " keyframes, " << saved.landmarks.size()
               << " landmarks, " << (saved.metric ? "metric" : "arbitrary unit")
@@ -621,26 +768,50 @@ int RunRun(const std::vector<std::string>& args) {
   const StopSignal stop;
   std::cerr << "[run] " << args[0] << " (" << DatasetFormatName(dataset->format()) << ", "
             << dataset->size() << " frames, " << (dataset->is_stereo() ? "stereo" : "mono")
-            << ") with " << options.estimator << "/" << options.mode << "\n";
+            << ") with " << options.estimator << "/" << options.mode;
+  if (runs.size() > 1) {
+    std::cerr << ", " << runs.size() << " draws (ransac_order_seed " << runs.seed(0) << "-"
+              << runs.seed(runs.size() - 1) << ") on " << ensemble_options.threads << " thread"
+              << (ensemble_options.threads > 1 ? "s" : "");
+  }
+  std::cerr << "\n";
   // --video: what the frontend saw, frame by frame.
   std::optional<report::FrameVideo> video;
   if (!FLAGS_video.empty()) video.emplace(FLAGS_video);
-  const FramesRun run = TrackEveryFrame(dataset.get(), &system, stop, video ? &*video : nullptr);
-  // The causal (online) trajectory, then the global refinement of the whole run.
-  const Trajectory online_trajectory = system.trajectory();
-  const RefinementSummary refinement = Refine(&system, run, options);
+  const FramesRun run = TrackEveryFrame(dataset.get(), &runs, stop, video ? &*video : nullptr);
+  // The causal (online) trajectories, then the global refinement of the whole run.
+  const std::vector<Trajectory> online_runs = runs.Trajectories();
+  const std::vector<RefinementSummary> refinements = Refine(&runs, run, options);
+  const std::vector<Trajectory> final_runs = runs.Trajectories();
+  const DrawsResult draws = FuseDraws(runs, final_runs, online_runs);
+  // The draw whose map, report and per-frame statistics are written (the only one by default).
+  const System& system = runs.draw(draws.reference);
+  const RefinementSummary& refinement = refinements[draws.reference];
 
   // Outputs: each file is written to a temporary and renamed, so none is ever half written.
   const std::string dir = FLAGS_out;
-  const Trajectory trajectory = system.trajectory();
+  const Trajectory& trajectory = draws.trajectory;
   std::vector<Eigen::Vector3d> map_points =
-      WriteTrajectoryAndMap(system, trajectory, online_trajectory, refinement.done, dir);
+      WriteTrajectoryAndMap(system, trajectory, draws.online_trajectory, refinement.done, dir);
   const size_t landmarks = map_points.size();
+  if (runs.size() > 1) {
+    CreateDirectories(dir + "/draws");
+    for (int k = 0; k < runs.size(); ++k) {
+      WriteTrajectoryTum(dir + "/draws/seed_" + std::to_string(runs.seed(k)) + ".txt",
+                         final_runs[k]);
+    }
+  }
 
   const auto& stats = system.stats();
-  const FrameCounts counts = CountFrames(stats);
+  FrameCounts counts = CountFrames(stats);
+  // Several draws: a frame's time is the wall time of all of them.
+  if (runs.size() > 1) counts.total_ms = runs.wall_ms();
   nlohmann::json summary =
       Summary(system, counts, run, refinement, trajectory.size(), landmarks);
+  if (runs.size() > 1) {
+    summary["draws"] =
+        DrawsJson(runs, final_runs, draws, *dataset, options, ensemble_options.threads);
+  }
   // --map: the first frame placed in the saved map (-1: none).
   int64_t localised_at = -1;
   if (!FLAGS_map.empty()) {
@@ -652,7 +823,7 @@ int RunRun(const std::vector<std::string>& args) {
     }
     summary["saved_map"] = {{"path", FLAGS_map}, {"localised_at_frame", localised_at}};
   }
-  const RunEvaluation evaluation = EvaluateRun(*dataset, trajectory, online_trajectory,
+  const RunEvaluation evaluation = EvaluateRun(*dataset, trajectory, draws.online_trajectory,
                                                refinement.done, options, dir, &summary);
   nlohmann::json frames = nlohmann::json::array();
   for (size_t i = 0; i < stats.size(); ++i) {
@@ -708,12 +879,14 @@ const CommandRegistrar kRegistrar(
      "dala run DATASET --out DIR [--config FILE] [--estimator ba|ekf] [--mode stereo|mono]\n"
      "         [--set section.key=value ...] [--format auto|kitti|euroc|tum|synthetic]\n"
      "         [--first_frame N] [--max_frames N] [--calibration FILE] [--strict]\n"
-     "         [--map FILE] [--video FILE.mp4] [--dump_config | --dump_config_all]\n"
+     "         [--map FILE] [--video FILE.mp4] [--draws N [--threads T]]\n"
+     "         [--dump_config | --dump_config_all]\n"
      "       dala run VIDEO|IMAGE_FOLDER --calibration FILE --out DIR [--mode mono]\n"
      "         [--fps HZ] [--times FILE] [--right_folder DIR] [--stereo_layout side_by_side]\n"
      "         [--ground_truth FILE]\n"
      "       dala run FILE.bag --topic /cam0/image_raw [--right_topic /cam1/image_raw]\n"
-     "         [--calibration FILE] --out DIR (a ROS 1 bag; CameraInfo from the bag when present)\n\n"
+     "         [--calibration FILE] --out DIR (a ROS 1 bag; CameraInfo from the bag when "
+     "present)\n\n"
      "Runs the visual frontend and the chosen estimator over every frame of DATASET (a KITTI\n"
      "odometry sequence, an EuRoC ASL folder, a TUM RGB-D folder, a `dala synth` output, a\n"
      "folder of images or a video file with its calibration: docs/datasets.md) and\n"
@@ -737,7 +910,15 @@ const CommandRegistrar kRegistrar(
      "--map FILE starts in the map.dmap of an earlier run (same camera and options; a stereo run\n"
      "needs a stereo map): each frame is relocalised against the map's keyframes until one is\n"
      "placed (frames before have no pose), then the run continues in the map's frame and unit;\n"
-     "report.json's summary.saved_map.localised_at_frame says where (ba estimator only).",
+     "report.json's summary.saved_map.localised_at_frame says where (ba estimator only).\n\n"
+     "--draws N runs the pipeline N times over the same frames, stepped together on --threads\n"
+     "threads, with the RANSAC draws ransac_order_seed + 0..N-1, and writes their per-frame mean\n"
+     "(each draw aligned onto it by Sim(3) with one camera, SE(3) with a metric scale; `dala\n"
+     "fuse`) as trajectory.txt, in the first draw's world and unit; map.ply, map.dmap and the\n"
+     "per-frame report are the first draw's, draws/seed_K.txt each draw's trajectory, and\n"
+     "report.json's summary.draws each draw's ATE and the draws' spread. It costs N runs' work;\n"
+     "it pays where the draws disagree (one camera on real images: docs/evaluation.md,\n"
+     "\"Several draws in one run\").",
      &RunRun, __FILE__});
 
 }  // namespace

@@ -1,0 +1,120 @@
+#include "backend/system_ensemble.h"
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+
+#include "core/error.h"
+
+namespace dala {
+
+bool SystemEnsembleOptions::IsValid(std::string* why) const {
+  if (draws < 1) {
+    *why = "draws must be >= 1, not " + std::to_string(draws);
+    return false;
+  }
+  if (threads < 1) {
+    *why = "threads must be >= 1, not " + std::to_string(threads);
+    return false;
+  }
+  return true;
+}
+
+SystemEnsemble::SystemEnsemble(const StereoRig& rig, const SystemOptions& options,
+                               const SystemEnsembleOptions& ensemble) {
+  std::string why;
+  if (!ensemble.IsValid(&why)) throw Error() << "invalid ensemble options: " << why;
+  for (int k = 0; k < ensemble.draws; ++k) {
+    SystemOptions draw_options = options;
+    draw_options.ransac_order_seed = options.ransac_order_seed + static_cast<uint64_t>(k);
+    draws_.push_back(std::make_unique<System>(rig, draw_options));
+  }
+  workers_.resize(std::min(ensemble.threads, ensemble.draws) - 1);
+}
+
+template <typename Task>
+void SystemEnsemble::ForEachDraw(const Task& task) {
+  const int threads = static_cast<int>(workers_.size()) + 1;
+  std::vector<std::exception_ptr> errors(draws_.size());
+  const auto run_thread = [&](int t) {
+    for (int k = t; k < size(); k += threads) {
+      try {
+        task(k);
+      } catch (...) {
+        errors[k] = std::current_exception();
+      }
+    }
+  };
+  for (int t = 1; t < threads; ++t) workers_[t - 1].Start([&run_thread, t] { run_thread(t); });
+  run_thread(0);
+  for (WorkerThread& w : workers_) w.Wait();
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
+TrackResult SystemEnsemble::Track(const Frame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<TrackResult> results(draws_.size());
+  ForEachDraw([&](int k) { results[k] = draws_[k]->Track(frame); });
+  wall_ms_.push_back(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  return results.front();
+}
+
+void SystemEnsemble::SkipFrame(FrameId frame, int64_t t_ns, const std::string& note) {
+  for (auto& draw : draws_) draw->SkipFrame(frame, t_ns, note);
+}
+
+void SystemEnsemble::UseMap(const SavedMap& map) {
+  for (auto& draw : draws_) draw->UseMap(map);
+}
+
+std::vector<RefinementSummary> SystemEnsemble::Finish() {
+  std::vector<RefinementSummary> summaries(draws_.size());
+  ForEachDraw([&](int k) { summaries[k] = draws_[k]->Finish(); });
+  return summaries;
+}
+
+std::vector<Trajectory> SystemEnsemble::Trajectories() const {
+  std::vector<Trajectory> trajectories;
+  for (const auto& draw : draws_) trajectories.push_back(draw->trajectory());
+  return trajectories;
+}
+
+AlignmentType SystemEnsemble::FusionAlignment() const {
+  return first().IsMetric() ? AlignmentType::kSE3 : AlignmentType::kSim3;
+}
+
+std::vector<int> SystemEnsemble::FusableDraws(const std::vector<Trajectory>& trajectories) const {
+  constexpr size_t kAlignmentPoses = 3;
+  std::vector<int> draws;
+  for (size_t k = 0; k < trajectories.size(); ++k) {
+    if (trajectories[k].size() >= kAlignmentPoses) draws.push_back(static_cast<int>(k));
+  }
+  return draws;
+}
+
+bool SystemEnsemble::Fuse(const std::vector<Trajectory>& trajectories,
+                          const std::vector<int>& draws, FusedTrajectory* fused,
+                          std::string* why) const {
+  if (draws.empty()) {
+    *why = "no draw to fuse";
+    return false;
+  }
+  if (draws.size() == 1) {
+    *fused = FusedTrajectory();
+    fused->trajectory = trajectories.at(draws.front());
+    fused->runs.assign(fused->trajectory.size(), 1);
+    fused->spread.assign(fused->trajectory.size(), 0.0);
+    fused->alignments.assign(1, Sim3Alignment());
+    return true;
+  }
+  std::vector<Trajectory> runs;
+  for (int k : draws) runs.push_back(trajectories.at(k));
+  TrajectoryFusionOptions options;
+  options.alignment = FusionAlignment();
+  return FuseTrajectories(runs, options, fused, why);
+}
+
+}  // namespace dala

@@ -1,0 +1,143 @@
+// SystemEnsemble: each draw is the run of its seed alone, whatever the number of threads; the
+// draws are fused into the first one's world; mistakes are errors.
+#include "backend/system_ensemble.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/sim/synthetic_sequence.h"
+#include "tests/test_util.h"
+
+namespace dala {
+namespace {
+
+sim::SimOptions ShortRover() {
+  sim::SimOptions sim;
+  sim.preset = "rover_loop";
+  sim.frames = 40;
+  sim.seed = 3;
+  return sim;
+}
+
+SystemOptions Mono(uint64_t seed) {
+  SystemOptions options;
+  options.mode = "mono";
+  options.ransac_order_seed = seed;
+  return options;
+}
+
+SystemEnsembleOptions Draws(int draws, int threads) {
+  SystemEnsembleOptions options;
+  options.draws = draws;
+  options.threads = threads;
+  return options;
+}
+
+bool SamePoses(const Trajectory& a, const Trajectory& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a.poses[i].t_ns != b.poses[i].t_ns ||
+        !a.poses[i].T_w_c.matrix().isApprox(b.poses[i].T_w_c.matrix(), 0.0)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Three draws stepped on two threads (the first thread steps draws 0 and 2), against three
+// Systems run alone, one after the other, with the seeds 5, 6 and 7: the same trajectories to
+// the bit.
+TEST(SystemEnsemble, EachDrawIsTheRunOfItsSeedWhateverTheThreads) {
+  const sim::SyntheticSequence seq(ShortRover());
+  SystemEnsemble two_threads(seq.rig(), Mono(5), Draws(3, 2));
+  std::vector<std::unique_ptr<System>> alone;
+  for (uint64_t seed : {5, 6, 7}) alone.push_back(std::make_unique<System>(seq.rig(), Mono(seed)));
+  for (size_t i = 0; i < seq.size(); ++i) {
+    const Frame frame = seq.Render(i);
+    const TrackResult r = two_threads.Track(frame);
+    const TrackResult first = alone[0]->Track(frame);
+    for (size_t k = 1; k < alone.size(); ++k) alone[k]->Track(frame);
+    EXPECT_EQ(r.valid, first.valid) << "frame " << i;  // Track returns the first draw's result.
+  }
+  two_threads.Finish();
+  for (auto& system : alone) system->Finish();
+  ASSERT_EQ(two_threads.size(), 3);
+  EXPECT_EQ(two_threads.wall_ms().size(), seq.size());
+  const std::vector<Trajectory> draws = two_threads.Trajectories();
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(two_threads.seed(k), 5u + k);
+    EXPECT_GT(draws[k].size(), seq.size() / 2) << "draw " << k << " barely initialised";
+    EXPECT_TRUE(SamePoses(draws[k], alone[k]->trajectory())) << "draw " << k;
+  }
+  // Otherwise the seeds change nothing and the test above proves nothing.
+  EXPECT_FALSE(SamePoses(draws[0], draws[1]));
+
+  // Fused into the first draw's world and unit: its first pose stays near the first draw's.
+  EXPECT_EQ(two_threads.FusionAlignment(), AlignmentType::kSim3);
+  FusedTrajectory fused;
+  std::string why;
+  const std::vector<int> fusable = two_threads.FusableDraws(draws);
+  ASSERT_EQ(fusable, (std::vector<int>{0, 1, 2}));
+  ASSERT_TRUE(two_threads.Fuse(draws, fusable, &fused, &why)) << why;
+  ASSERT_EQ(fused.alignments.size(), 3u);
+  EXPECT_NEAR(fused.alignments[0].scale, 1.0, 0.05);
+  const double path = seq.PathLength();
+  EXPECT_LT((fused.trajectory.poses.front().T_w_c.translation() -
+             draws[0].poses.front().T_w_c.translation())
+                .norm(),
+            0.01 * path);
+}
+
+// One draw fuses to itself; a draw without a pose is not fusable.
+TEST(SystemEnsemble, OneDrawIsItsOwnTrajectory) {
+  const sim::SyntheticSequence seq(ShortRover());
+  const SystemEnsemble runs(seq.rig(), Mono(0), Draws(2, 1));
+  Trajectory some;
+  for (int i = 0; i < 5; ++i) some.Add(i * 1000, Pose::Identity());
+  const std::vector<Trajectory> trajectories = {Trajectory(), some};
+  const std::vector<int> fusable = runs.FusableDraws(trajectories);
+  ASSERT_EQ(fusable, std::vector<int>{1});
+  FusedTrajectory fused;
+  std::string why;
+  ASSERT_TRUE(runs.Fuse(trajectories, fusable, &fused, &why)) << why;
+  EXPECT_EQ(fused.trajectory.size(), 5u);
+  EXPECT_EQ(fused.runs, std::vector<int>(5, 1));
+  EXPECT_FALSE(runs.Fuse(trajectories, {}, &fused, &why));
+  EXPECT_EQ(why, "no draw to fuse");
+}
+
+// A stereo rig's draws are metric: they are brought onto one another rigidly.
+TEST(SystemEnsemble, StereoDrawsFuseRigidly) {
+  const sim::SyntheticSequence seq(ShortRover());
+  const SystemEnsemble runs(seq.rig(), SystemOptions(), Draws(2, 2));
+  EXPECT_EQ(runs.FusionAlignment(), AlignmentType::kSE3);
+}
+
+TEST(SystemEnsemble, MistakesAreErrorsThatChangeNothing) {
+  const sim::SyntheticSequence seq(ShortRover());
+  EXPECT_NE(testing::ErrorOf([&] {
+              SystemEnsemble(seq.rig(), Mono(0), Draws(0, 1));
+            }).find("draws must be >= 1, not 0"),
+            std::string::npos);
+  EXPECT_NE(testing::ErrorOf([&] {
+              SystemEnsemble(seq.rig(), Mono(0), Draws(2, 0));
+            }).find("threads must be >= 1, not 0"),
+            std::string::npos);
+  // A frame out of time order: every draw refuses it, the error reaches the caller, and the
+  // next frame is tracked as if it had never come.
+  SystemEnsemble runs(seq.rig(), Mono(0), Draws(2, 2));
+  runs.Track(seq.Render(0));
+  runs.Track(seq.Render(1));
+  Frame earlier = seq.Render(2);
+  earlier.t_ns = runs.first().stats().back().t_ns - 1;
+  const std::string error = testing::ErrorOf([&] { runs.Track(earlier); });
+  EXPECT_NE(error.find("comes before the previous frame"), std::string::npos) << error;
+  runs.Track(seq.Render(2));
+  for (int k = 0; k < runs.size(); ++k) EXPECT_EQ(runs.draw(k).stats().size(), 3u);
+}
+
+}  // namespace
+}  // namespace dala
