@@ -163,6 +163,7 @@ std::vector<std::string> RunCommand(const BenchRun& run, const std::string& dala
     argv.insert(argv.end(), {"--config", run.config.config_file});
   }
   for (const std::string& kv : run.config.set) argv.insert(argv.end(), {"--set", kv});
+  if (run.config.draws > 1) argv.insert(argv.end(), {"--draws", std::to_string(run.config.draws)});
   if (run.has_start()) argv.insert(argv.end(), {"--first_frame", std::to_string(run.first_frame)});
   return argv;
 }

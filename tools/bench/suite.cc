@@ -173,7 +173,7 @@ ConfigSpec ReadConfig(const cv::FileNode& n, const Where& where, const std::stri
     throw Error() << where.str()
                   << ": expected a map such as {name: ba-stereo, estimator: ba, mode: stereo}";
   }
-  CheckKeys(n, where, {"name", "estimator", "mode", "config", "set"});
+  CheckKeys(n, where, {"name", "estimator", "mode", "config", "set", "draws"});
   ConfigSpec c;
   c.name = ReadString(n, where, "name", true);
   CheckName(c.name, where.At("name"));
@@ -194,6 +194,7 @@ ConfigSpec ReadConfig(const cv::FileNode& n, const Where& where, const std::stri
       throw Error() << where.At("config").str() << ": " << c.config_file << " does not exist";
     }
   }
+  ReadInt(n, where, "draws", 1, &c.draws);
   const cv::FileNode set = n["set"];
   if (!set.empty() && !set.isNone()) {
     if (!set.isSeq()) {

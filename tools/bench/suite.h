@@ -50,6 +50,7 @@ struct ConfigSpec {
   std::string mode = "stereo";   // "stereo" or "mono".
   std::string config_file;       // `dala run --config` (absolute), optional.
   std::vector<std::string> set;  // `dala run --set key=value`, in order.
+  int draws = 1;                 // `dala run --draws N` (1: one run, no flag given).
 };
 
 struct BenchSuite {

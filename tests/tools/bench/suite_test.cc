@@ -42,7 +42,8 @@ TEST(BenchSuite, ReadsSequencesAndConfigurations) {
                                  "    estimator: ekf\n"
                                  "    mode: mono\n"
                                  "    config: extra.yaml\n"
-                                 "    set: [\"ekf.max_landmarks=40\", \"seed=3\"]\n");
+                                 "    set: [\"ekf.max_landmarks=40\", \"seed=3\"]\n"
+                                 "  - {name: ba-mono-x3, estimator: ba, mode: mono, draws: 3}\n");
   const BenchSuite suite = LoadBenchSuite(path);
   EXPECT_DOUBLE_EQ(suite.timeout_s, 120.0);
   ASSERT_EQ(suite.sequences.size(), 3u);
@@ -55,7 +56,9 @@ TEST(BenchSuite, ReadsSequencesAndConfigurations) {
   EXPECT_FALSE(suite.sequences[1].is_rendered());
   EXPECT_TRUE(suite.sequences[2].mono);
   EXPECT_EQ(suite.sequences[2].frames, 0);
-  ASSERT_EQ(suite.configurations.size(), 2u);
+  ASSERT_EQ(suite.configurations.size(), 3u);
+  EXPECT_EQ(suite.configurations[0].draws, 1);
+  EXPECT_EQ(suite.configurations[2].draws, 3);
   EXPECT_EQ(suite.configurations[1].estimator, "ekf");
   EXPECT_EQ(suite.configurations[1].mode, "mono");
   EXPECT_EQ(suite.configurations[1].config_file, dir / "extra.yaml");
@@ -91,6 +94,8 @@ TEST(BenchSuite, ErrorsNameTheFileTheKeyAndWhatIsExpected) {
        "sequences[0].name: 'a/b' is not a valid name"},
       {seqs + "configurations:\n  - {name: c, estimator: ba, mode: mono, set: [\"novalue\"]}\n",
        "configurations[0].set[0]: expected a \"key=value\" string"},
+      {seqs + "configurations:\n  - {name: c, estimator: ba, mode: mono, draws: 0}\n",
+       "configurations[0].draws: expected an integer >= 1"},
       {seqs, "configurations: missing or empty"},
       {seqs + cfgs + "timeout: 3\n", "timeout: unknown key; expected one of"},
   };
