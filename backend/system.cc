@@ -71,7 +71,13 @@ System::System(const StereoRig& rig, const SystemOptions& options) : rig_(rig), 
   frontend_ = std::make_unique<Frontend>(rig_, options_.frontend);
 }
 
-TrackResult System::Track(const Frame& frame) {
+TrackResult System::Track(const Frame& frame) { return TrackFrame(frame, nullptr); }
+
+TrackResult System::Track(const Frame& frame, const FrameFeatures& features) {
+  return TrackFrame(frame, &features);
+}
+
+TrackResult System::TrackFrame(const Frame& frame, const FrameFeatures* features) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   if (!stats_.empty() && frame.t_ns < stats_.back().t_ns) {
@@ -79,7 +85,8 @@ TrackResult System::Track(const Frame& frame) {
                   << " comes before the previous frame (t_ns " << stats_.back().t_ns
                   << "): give System::Track the frames in time order";
   }
-  FrameMeasurement m = frontend_->Process(frame);
+  FrameMeasurement m =
+      features != nullptr ? frontend_->Process(frame, *features) : frontend_->Process(frame);
   if (options_.use_odometry && frame.T_w_odom && T_w_odom_prev_) {
     // Odometry between the previous frame and this one (SystemOptions::use_odometry).
     MotionEstimate odometry;

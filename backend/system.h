@@ -80,6 +80,10 @@ class System {
   // frame before the previous one in time, an image that is empty, not 8-bit grey, or not of
   // the rig's size (CheckFrameSuitsRig, frontend/frontend.h).
   TrackResult Track(const Frame& frame);
+  // The same, with the frame's features computed already (ComputeFrameFeatures with rig() and
+  // options().frontend): the same result, without detecting the images again. How
+  // SystemEnsemble shares one detection between its draws.
+  TrackResult Track(const Frame& frame, const FrameFeatures& features);
   // Records a frame whose images could not be read (dala run skips such a frame): stats() report
   // it lost with `note`, and it gets no pose. Neither the frontend nor the estimator sees it: the
   // next frame is tracked from the intact frame before the gap (the constant-velocity prediction,
@@ -130,6 +134,8 @@ class System {
   // estimator only.
   void UseMap(const SavedMap& map);
   const SystemOptions& options() const { return options_; }
+  // The rig in use: the one given, without its right camera in mode "mono" (one camera).
+  const StereoRig& rig() const { return rig_; }
   // What fixes the map's unit: "metric (stereo)", "metric (odometry)" (the mono EKF fed by the
   // dataset's odometry), "metric (stereo visual motion)" (the mono EKF fed by the stereo motion)
   // or "arbitrary (monocular)" (one camera: the unit is the first two-view baseline; align with
@@ -152,6 +158,7 @@ class System {
   static constexpr size_t kRecordPruneEvery = 16;
 
  private:
+  TrackResult TrackFrame(const Frame& frame, const FrameFeatures* features);
   void RecordKeyframe(const cv::Mat& left);
 
   StereoRig rig_;

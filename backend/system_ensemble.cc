@@ -56,7 +56,14 @@ void SystemEnsemble::ForEachDraw(const Task& task) {
 TrackResult SystemEnsemble::Track(const Frame& frame) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<TrackResult> results(draws_.size());
-  ForEachDraw([&](int k) { results[k] = draws_[k]->Track(frame); });
+  if (draws_.size() == 1) {
+    results[0] = draws_[0]->Track(frame);
+  } else {
+    const FrameFeatures features =
+        ComputeFrameFeatures(frame, first().rig(), first().options().frontend,
+                             workers_.empty() ? nullptr : &workers_[0]);
+    ForEachDraw([&](int k) { results[k] = draws_[k]->Track(frame, features); });
+  }
   wall_ms_.push_back(
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   return results.front();

@@ -54,8 +54,11 @@ class SystemEnsemble {
   SystemEnsemble(const StereoRig& rig, const SystemOptions& options,
                  const SystemEnsembleOptions& ensemble);
 
-  // Tracks the frame in every draw and returns the first draw's result. An exception thrown by
-  // a draw's System::Track is rethrown here (the first draw's first) once every draw returned.
+  // Tracks the frame in every draw and returns the first draw's result. The images are detected
+  // (and matched in stereo) once for all draws (ComputeFrameFeatures: they do not depend on the
+  // draw). An exception thrown by a draw's System::Track is rethrown here (the first draw's
+  // first) once every draw returned; a frame that does not suit the rig throws before any draw
+  // sees it.
   TrackResult Track(const Frame& frame);
   void SkipFrame(FrameId frame, int64_t t_ns, const std::string& note);
   // Every draw starts in the saved map (System::UseMap).

@@ -487,23 +487,73 @@ void Frontend::FollowEstimator() {
   }
 }
 
-DetectedImage Frontend::Detect(const Frame& frame, bool stereo, TrackedFrame* cur) {
+namespace {
+
+// The left image's interest points into *left; returns the right image's (stereo). `helper`
+// (optional) detects the right image beside the left one, or helps with the left image's
+// pyramid levels and descriptors for one camera.
+DetectedImage DetectImages(const Frame& frame, bool stereo, const HarrisOptions& options,
+                           WorkerThread* helper, DetectedImage* left) {
   DetectedImage right;
-  if (stereo && options_.parallel_detection) {
-    detection_worker_.Start([&] { right = DetectHarris(frame.right, options_.harris); });
-    cur->detection = DetectHarris(frame.left, options_.harris);
-    detection_worker_.Wait();
+  if (stereo && helper != nullptr) {
+    helper->Start([&] { right = DetectHarris(frame.right, options); });
+    *left = DetectHarris(frame.left, options);
+    helper->Wait();
   } else {
-    // One camera: the worker helps with the left image's pyramid levels and descriptors.
-    WorkerThread* helper =
-        !stereo && options_.parallel_detection ? &detection_worker_ : nullptr;
-    cur->detection = DetectHarris(frame.left, options_.harris, helper);
-    if (stereo) right = DetectHarris(frame.right, options_.harris);
+    *left = DetectHarris(frame.left, options, stereo ? nullptr : helper);
+    if (stereo) right = DetectHarris(frame.right, options);
   }
+  return right;
+}
+
+}  // namespace
+
+FrameFeatures ComputeFrameFeatures(const Frame& frame, const StereoRig& rig,
+                                   const FrontendOptions& options, WorkerThread* helper) {
+  CheckFrameSuitsRig(frame, rig);
+  FrameFeatures features;
+  features.frame = frame.id;
+  features.stereo = rig.is_stereo() && !frame.right.empty();
+  auto t0 = Clock::now();
+  const DetectedImage right =
+      DetectImages(frame, features.stereo, options.harris,
+                   options.parallel_detection ? helper : nullptr, &features.left);
+  features.detect_ms = MsSince(t0);
+  t0 = Clock::now();
+  if (features.stereo) {
+    features.stereo_points =
+        MatchStereo(rig, features.left, right, frame.left, frame.right, options.stereo);
+  }
+  features.stereo_ms = MsSince(t0);
+  return features;
+}
+
+DetectedImage Frontend::Detect(const Frame& frame, bool stereo, TrackedFrame* cur) {
+  const DetectedImage right =
+      DetectImages(frame, stereo, options_.harris,
+                   options_.parallel_detection ? &detection_worker_ : nullptr, &cur->detection);
   const size_t n = cur->detection.points.size();
   cur->landmark.assign(n, LandmarkId());
   cur->track_length.assign(n, 1);
   return right;
+}
+
+std::optional<std::vector<Match>> Frontend::AdoptFeatures(const FrameFeatures& features,
+                                                          TrackedFrame* cur) {
+  cur->detection = features.left;
+  // The matcher's neighbour lists are computed on first use: each frontend its own.
+  cur->detection.neighbour_cache = std::make_shared<NeighbourCache>();
+  const size_t n = cur->detection.points.size();
+  cur->landmark.assign(n, LandmarkId());
+  cur->track_length.assign(n, 1);
+  cur->stereo = features.stereo ? features.stereo_points
+                                : std::vector<std::optional<StereoPoint>>(n, std::nullopt);
+  // As MatchStereoAndPredict: the first tracking attempt's matches made here only where it
+  // makes them beside the stereo matching (the same matches TrackFromPrevious would make).
+  if (features.stereo && prev_ && options_.parallel_detection) {
+    return MatchTemporal(*prev_, cur->detection, &velocity_T_prev_cur_);
+  }
+  return std::nullopt;
 }
 
 std::optional<std::vector<Match>> Frontend::MatchStereoAndPredict(const Frame& frame, bool stereo,
@@ -648,9 +698,18 @@ void Frontend::FillObservations(const TrackedFrame& cur, FrameMeasurement* out) 
   }
 }
 
-FrameMeasurement Frontend::Process(const Frame& frame) {
+FrameMeasurement Frontend::Process(const Frame& frame) { return ProcessFrame(frame, nullptr); }
+
+FrameMeasurement Frontend::Process(const Frame& frame, const FrameFeatures& features) {
+  return ProcessFrame(frame, &features);
+}
+
+FrameMeasurement Frontend::ProcessFrame(const Frame& frame, const FrameFeatures* features) {
   CheckFrameSuitsRig(frame, rig_);
   const bool stereo = rig_.is_stereo() && !frame.right.empty();
+  CHECK(features == nullptr || (features->frame == frame.id && features->stereo == stereo))
+      << "the features of frame " << features->frame.value << " given with frame "
+      << frame.id.value;
   const auto t_start = Clock::now();
   FrameMeasurement out;
   out.frame = frame.id;
@@ -661,16 +720,24 @@ FrameMeasurement Frontend::Process(const Frame& frame) {
   // 1. Interest points, both images at once.
   TrackedFrame cur;
   cur.id = frame.id;
-  const DetectedImage right = Detect(frame, stereo, &cur);
-  out.timings.detect_ms = MsSince(t_start);
-
-  // 2. Stereo, and on the worker the temporal matches of the first tracking attempt (predicted
-  // by the constant velocity): both only read the detections, so they run side by side, with
-  // the same result as one after the other. stereo_ms is then the time of both.
+  std::optional<std::vector<Match>> predicted_matches;
   auto t0 = Clock::now();
-  std::optional<std::vector<Match>> predicted_matches =
-      MatchStereoAndPredict(frame, stereo, right, &cur);
-  out.timings.stereo_ms = MsSince(t0);
+  if (features != nullptr) {
+    // Computed already (ComputeFrameFeatures): their times are this frame's too.
+    out.timings.detect_ms = features->detect_ms;
+    predicted_matches = AdoptFeatures(*features, &cur);
+    out.timings.stereo_ms = features->stereo_ms + MsSince(t0);
+  } else {
+    const DetectedImage right = Detect(frame, stereo, &cur);
+    out.timings.detect_ms = MsSince(t_start);
+
+    // 2. Stereo, and on the worker the temporal matches of the first tracking attempt
+    // (predicted by the constant velocity): both only read the detections, so they run side by
+    // side, with the same result as one after the other. stereo_ms is then the time of both.
+    t0 = Clock::now();
+    predicted_matches = MatchStereoAndPredict(frame, stereo, right, &cur);
+    out.timings.stereo_ms = MsSince(t0);
+  }
 
   // 3. Tracking and motion.
   t0 = Clock::now();

@@ -90,6 +90,25 @@ struct FrontendOptions {
 // is not the calibration's. (A right image on a monocular rig is ignored, not an error.)
 void CheckFrameSuitsRig(const Frame& frame, const StereoRig& rig);
 
+// What the frontend computes from a frame's images alone: the left image's interest points and,
+// for a stereo frame, each one's stereo match. It depends on the images, the rig and the options
+// `harris` and `stereo`, never on earlier frames or on a RANSAC, so pipelines over the same
+// frames that differ in their RANSAC draws compute it once (SystemEnsemble) and each gets the
+// result it would have computed itself.
+struct FrameFeatures {
+  FrameId frame;
+  bool stereo = false;  // The frame was matched in stereo (a stereo rig and a right image).
+  DetectedImage left;
+  std::vector<std::optional<StereoPoint>> stereo_points;  // Per left point; stereo frames.
+  double detect_ms = 0.0, stereo_ms = 0.0;                // The time it took, per step.
+};
+
+// Computes a frame's features as Frontend::Process would: `helper` (optional) detects the right
+// image beside the left one, or the left image's pyramid levels for one camera. Throws as
+// CheckFrameSuitsRig does.
+FrameFeatures ComputeFrameFeatures(const Frame& frame, const StereoRig& rig,
+                                   const FrontendOptions& options, WorkerThread* helper);
+
 class Frontend {
  public:
   Frontend(const StereoRig& rig, const FrontendOptions& options);
@@ -97,6 +116,9 @@ class Frontend {
   // Processes the next frame (frames in time order). Images must be CV_8UC1 and of the rig's
   // size: CheckFrameSuitsRig throws dala::Error otherwise, before anything changes.
   FrameMeasurement Process(const Frame& frame);
+  // The same, with the frame's features computed already (ComputeFrameFeatures with this
+  // frontend's rig and options): the same measurement, without detecting the images again.
+  FrameMeasurement Process(const Frame& frame, const FrameFeatures& features);
 
   // Pose of the current camera obtained by chaining the visual motion estimates from the first
   // frame (identity): visual odometry, drifting like any dead reckoning. When tracking is lost
@@ -146,12 +168,19 @@ class Frontend {
     Pose T_w_c = Pose::Identity();  // Dead-reckoned pose.
   };
 
+  // Process, with the frame's features when they were computed already.
+  FrameMeasurement ProcessFrame(const Frame& frame, const FrameFeatures* features);
   // Process's steps, in order.
   // Takes over what the estimator said of the previous frame (its pose after a relocalisation,
   // the last keyframe it tracked).
   void FollowEstimator();
   // Detects the left image into *cur (its landmarks unset) and returns the right image's points.
   DetectedImage Detect(const Frame& frame, bool stereo, TrackedFrame* cur);
+  // The same from features computed already: *cur gets their left points (with a cache of its
+  // own) and stereo matches, and the temporal matches are predicted as
+  // MatchStereoAndPredict would (returned).
+  std::optional<std::vector<Match>> AdoptFeatures(const FrameFeatures& features, TrackedFrame* cur);
+
   // The stereo points of *cur, and beside them (on the worker) the temporal matches predicted
   // by the constant velocity, which TrackFromPrevious tries first.
   std::optional<std::vector<Match>> MatchStereoAndPredict(const Frame& frame, bool stereo,

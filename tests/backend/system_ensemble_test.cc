@@ -14,10 +14,10 @@
 namespace dala {
 namespace {
 
-sim::SimOptions ShortRover() {
+sim::SimOptions ShortRover(int frames = 40) {
   sim::SimOptions sim;
   sim.preset = "rover_loop";
-  sim.frames = 40;
+  sim.frames = frames;
   sim.seed = 3;
   return sim;
 }
@@ -47,33 +47,46 @@ bool SamePoses(const Trajectory& a, const Trajectory& b) {
   return true;
 }
 
-// Three draws stepped on two threads (the first thread steps draws 0 and 2), against three
-// Systems run alone, one after the other, with the seeds 5, 6 and 7: the same trajectories to
-// the bit.
-TEST(SystemEnsemble, EachDrawIsTheRunOfItsSeedWhateverTheThreads) {
-  const sim::SyntheticSequence seq(ShortRover());
-  SystemEnsemble two_threads(seq.rig(), Mono(5), Draws(3, 2));
+// `runs` (`draws` draws of `options`, on its threads) against Systems run alone, one after
+// the other, with the seeds options.ransac_order_seed + k: the same trajectories to the bit
+// (the ensemble detects each frame once for all draws; each System alone detects its own).
+// Returns the draws' trajectories.
+std::vector<Trajectory> ExpectDrawsAreRunsAlone(const sim::SyntheticSequence& seq,
+                                                const SystemOptions& options, int draws,
+                                                SystemEnsemble* runs) {
   std::vector<std::unique_ptr<System>> alone;
-  for (uint64_t seed : {5, 6, 7}) alone.push_back(std::make_unique<System>(seq.rig(), Mono(seed)));
+  for (int k = 0; k < draws; ++k) {
+    SystemOptions o = options;
+    o.ransac_order_seed = options.ransac_order_seed + k;
+    alone.push_back(std::make_unique<System>(seq.rig(), o));
+  }
   for (size_t i = 0; i < seq.size(); ++i) {
     const Frame frame = seq.Render(i);
-    const TrackResult r = two_threads.Track(frame);
+    const TrackResult r = runs->Track(frame);
     const TrackResult first = alone[0]->Track(frame);
     for (size_t k = 1; k < alone.size(); ++k) alone[k]->Track(frame);
     EXPECT_EQ(r.valid, first.valid) << "frame " << i;  // Track returns the first draw's result.
   }
-  two_threads.Finish();
+  runs->Finish();
   for (auto& system : alone) system->Finish();
-  ASSERT_EQ(two_threads.size(), 3);
-  EXPECT_EQ(two_threads.wall_ms().size(), seq.size());
-  const std::vector<Trajectory> draws = two_threads.Trajectories();
-  for (int k = 0; k < 3; ++k) {
-    EXPECT_EQ(two_threads.seed(k), 5u + k);
-    EXPECT_GT(draws[k].size(), seq.size() / 2) << "draw " << k << " barely initialised";
-    EXPECT_TRUE(SamePoses(draws[k], alone[k]->trajectory())) << "draw " << k;
+  EXPECT_EQ(runs->size(), draws);
+  EXPECT_EQ(runs->wall_ms().size(), seq.size());
+  const std::vector<Trajectory> trajectories = runs->Trajectories();
+  for (int k = 0; k < draws; ++k) {
+    EXPECT_EQ(runs->seed(k), options.ransac_order_seed + k);
+    EXPECT_GT(trajectories[k].size(), seq.size() / 2) << "draw " << k << " barely initialised";
+    EXPECT_TRUE(SamePoses(trajectories[k], alone[k]->trajectory())) << "draw " << k;
   }
   // Otherwise the seeds change nothing and the test above proves nothing.
-  EXPECT_FALSE(SamePoses(draws[0], draws[1]));
+  EXPECT_FALSE(SamePoses(trajectories[0], trajectories[1]));
+  return trajectories;
+}
+
+// One camera: three draws on two threads (the first thread steps draws 0 and 2).
+TEST(SystemEnsemble, EachDrawIsTheRunOfItsSeedWhateverTheThreads) {
+  const sim::SyntheticSequence seq(ShortRover());
+  SystemEnsemble two_threads(seq.rig(), Mono(5), Draws(3, 2));
+  const std::vector<Trajectory> draws = ExpectDrawsAreRunsAlone(seq, Mono(5), 3, &two_threads);
 
   // Fused into the first draw's world and unit: its first pose stays near the first draw's.
   EXPECT_EQ(two_threads.FusionAlignment(), AlignmentType::kSim3);
@@ -89,6 +102,15 @@ TEST(SystemEnsemble, EachDrawIsTheRunOfItsSeedWhateverTheThreads) {
              draws[0].poses.front().T_w_c.translation())
                 .norm(),
             0.01 * path);
+}
+
+// A stereo rig: the stereo matches are shared too.
+TEST(SystemEnsemble, StereoDrawsAreTheRunsOfTheirSeeds) {
+  const sim::SyntheticSequence seq(ShortRover(25));  // A stereo map from the first frame.
+  SystemOptions stereo;
+  stereo.ransac_order_seed = 2;
+  SystemEnsemble runs(seq.rig(), stereo, Draws(2, 2));
+  ExpectDrawsAreRunsAlone(seq, stereo, 2, &runs);
 }
 
 // One draw fuses to itself; a draw without a pose is not fusable.
