@@ -70,7 +70,8 @@ nlohmann::json WithoutTimings(nlohmann::json report) {
 // `dala run DATASET EXTRA` twice while busy processes load every core; the outputs (minus
 // timings) are byte-identical. Returns the first run's report.
 nlohmann::json ExpectIdenticalRunsUnderLoad(const testing::TempDir& dir, const std::string& dataset,
-                                            const std::string& extra) {
+                                            const std::string& extra,
+                                            const std::vector<std::string>& more_files = {}) {
   const BusyLoad load(static_cast<int>(std::max(2u, std::thread::hardware_concurrency())));
   EXPECT_GE(load.size(), 2u);
   for (const char* out : {"a", "b"}) {
@@ -78,10 +79,13 @@ nlohmann::json ExpectIdenticalRunsUnderLoad(const testing::TempDir& dir, const s
         "run " + dataset + " " + extra + " --out " + (dir / out) + " --progress=false", dir / out);
     EXPECT_EQ(r.status, 0) << r.log();
   }
-  for (const char* file : {"trajectory.txt", "trajectory_kitti.txt", "map.ply", "map.dmap"}) {
-    const std::string a = ReadAll(dir / (std::string("a/") + file));
+  std::vector<std::string> files = {"trajectory.txt", "trajectory_kitti.txt", "map.ply",
+                                    "map.dmap"};
+  files.insert(files.end(), more_files.begin(), more_files.end());
+  for (const std::string& file : files) {
+    const std::string a = ReadAll(dir / ("a/" + file));
     EXPECT_FALSE(a.empty()) << file;
-    EXPECT_TRUE(a == ReadAll(dir / (std::string("b/") + file))) << file << " differs";
+    EXPECT_TRUE(a == ReadAll(dir / ("b/" + file))) << file << " differs";
   }
   const nlohmann::json a = nlohmann::json::parse(ReadAll(dir / "a/report.json"));
   const nlohmann::json b = nlohmann::json::parse(ReadAll(dir / "b/report.json"));
@@ -119,6 +123,17 @@ TEST(DeterminismUnderLoad, KittiRunsGiveIdenticalFiles) {
   }
   testing::TempDir dir;
   ExpectIdenticalRunsUnderLoad(dir, kitti, "--mode mono");
+}
+
+// Three draws of one camera stepped on two threads (`dala run --draws 3`): the fused trajectory
+// and every draw's are the same run after run, whichever thread finished first.
+TEST(DeterminismUnderLoad, DrawsOnThreadsGiveIdenticalFiles) {
+  DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
+  testing::TempDir dir;
+  const nlohmann::json a = ExpectIdenticalRunsUnderLoad(
+      dir, testing::SharedDataDir() + "/kitti06_0000-0050", "--mode mono --draws 3 --threads 2",
+      {"draws/seed_0.txt", "draws/seed_1.txt", "draws/seed_2.txt"});
+  EXPECT_EQ(a.at("summary").at("draws").at("fused").get<int>(), 3);
 }
 
 }  // namespace

@@ -9,9 +9,9 @@
 #include <map>
 
 #include "backend/system.h"
+#include "backend/system_ensemble.h"
 #include "core/eval/evaluate.h"
 #include "core/eval/scale_along_path.h"
-#include "core/eval/trajectory_fusion.h"
 #include "core/io/dataset.h"
 #include "core/sim/synthetic_sequence.h"
 #include "tests/test_util.h"
@@ -118,29 +118,32 @@ TEST(MonoE2e, RoverStretchMonoBa) {
                              kRoverAtePercentBest, "%");
 }
 
-// Three RANSAC draws of the rover stretch fused (`dala fuse`, core/eval/trajectory_fusion.h):
-// the fused trajectory gives every frame a pose, is no farther from the truth than the worst of
-// its runs, and stays within its bound.
+// Three RANSAC draws of the rover stretch in one SystemEnsemble, fused (`dala run --draws 3`,
+// backend/system_ensemble.h): the fused trajectory gives every frame a pose, is no farther from
+// the truth than the worst of its draws, and stays within its bound.
 TEST(MonoE2e, ThreeDrawsFusedAreNoWorseThanTheirWorst) {
   const sim::SyntheticSequence seq(Preset("rover_loop", 150));
-  SystemOptions options = MonoBa();
-  std::vector<Trajectory> runs;
+  SystemEnsembleOptions three;
+  three.draws = 3;
+  three.threads = 2;
+  SystemEnsemble runs(seq.rig(), MonoBa(), three);  // `dala run --draws 3`.
+  for (size_t i = 0; i < seq.size(); ++i) runs.Track(seq.Render(i));
+  runs.Finish();
+  const std::vector<Trajectory> draws = runs.Trajectories();
+  EvalOptions eval;
+  eval.alignment = AlignmentType::kSim3;
   double worst = 0.0;
-  for (uint64_t draw = 0; draw < 3; ++draw) {
-    options.ransac_order_seed = draw;
-    const MonoRun run = RunRendered(seq, options);
-    ASSERT_TRUE(run.eval.ok) << run.eval.error;
-    std::cout << "[ measured ] ba/mono rover 150 frames, draw " << draw << ": Sim(3) ATE "
-              << run.eval.ate.translation.rmse << " m" << std::endl;
-    worst = std::max(worst, run.eval.ate.translation.rmse);
-    runs.push_back(run.trajectory);
+  for (int k = 0; k < runs.size(); ++k) {
+    const EvalResult draw = Evaluate(seq.ground_truth(), draws[k], eval);
+    ASSERT_TRUE(draw.ok) << draw.error;
+    std::cout << "[ measured ] ba/mono rover 150 frames, draw " << k << ": Sim(3) ATE "
+              << draw.ate.translation.rmse << " m" << std::endl;
+    worst = std::max(worst, draw.ate.translation.rmse);
   }
   FusedTrajectory fused;
   std::string why;
-  ASSERT_TRUE(FuseTrajectories(runs, TrajectoryFusionOptions(), &fused, &why)) << why;
+  ASSERT_TRUE(runs.Fuse(draws, runs.FusableDraws(draws), &fused, &why)) << why;
   EXPECT_EQ(fused.trajectory.size(), seq.size());
-  EvalOptions eval;
-  eval.alignment = AlignmentType::kSim3;
   const EvalResult result = Evaluate(seq.ground_truth(), fused.trajectory, eval);
   ASSERT_TRUE(result.ok) << result.error;
   const double fused_ate = result.ate.translation.rmse;
