@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
@@ -334,6 +335,30 @@ DrawsResult FuseDraws(const SystemEnsemble& runs, const std::vector<Trajectory>&
               << "): trajectory_online.txt is draw " << runs.seed(r.reference) << "'s\n";
   }
   return r;
+}
+
+// --draws, per frame of report.json: "ms".all_draws, the wall time of every draw (the frame's
+// "ms" are the reference draw's own stages, beside the shared detection), and "draws_spread",
+// the RMS distance of the fused draws' positions from their mean (the reference's unit; null:
+// no fused pose).
+void AddDrawsToFrames(const SystemEnsemble& runs, const DrawsResult& draws,
+                      const std::vector<FrameStats>& stats, nlohmann::json* frames) {
+  std::map<int64_t, double> spread_at;
+  if (draws.not_fused.empty() && draws.fused_draws.size() > 1) {
+    for (size_t i = 0; i < draws.fused.trajectory.size(); ++i) {
+      spread_at[draws.fused.trajectory.poses[i].t_ns] = draws.fused.spread[i];
+    }
+  }
+  size_t tracked = 0;  // SystemEnsemble::wall_ms has one entry per frame tracked (not skipped).
+  for (size_t i = 0; i < stats.size(); ++i) {
+    nlohmann::json& frame = (*frames)[i];
+    if (!stats[i].skipped && tracked < runs.wall_ms().size()) {
+      frame["ms"]["all_draws"] = runs.wall_ms()[tracked++];
+    }
+    const auto spread = spread_at.find(stats[i].t_ns);
+    frame["draws_spread"] =
+        spread == spread_at.end() ? nlohmann::json(nullptr) : nlohmann::json(spread->second);
+  }
 }
 
 // summary.draws: each draw's seed, poses, ATE (with ground truth) and scale onto the fused
@@ -830,6 +855,7 @@ int RunRun(const std::vector<std::string>& args) {
     frames.push_back(FrameJson(stats[i]));
     if (i < run.rss_mb.size()) frames.back()["rss_mb"] = run.rss_mb[i];
   }
+  if (runs.size() > 1) AddDrawsToFrames(runs, draws, stats, &frames);
   summary["peak_rss_mb"] = PeakResidentMemoryMb();
   DrawMemoryChart(stats, run.rss_mb, dir + "/memory.png");
   std::ostringstream printed;

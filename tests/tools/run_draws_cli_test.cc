@@ -86,6 +86,13 @@ TEST_F(RunDrawsCli, ThreeDrawsFusedAndEachWritten) {
   EXPECT_GE(fused.size(), ReadTrajectory(dir_ / "plain/trajectory.txt").size());
   EXPECT_LE(summary.at("ate").at("rmse").get<double>(), worst);
   EXPECT_GT(draws.at("spread_max").get<double>(), 0.0);
+  // Per frame: the draws' spread where the fusion has a pose, and the time of every draw.
+  size_t with_spread = 0;
+  for (const nlohmann::json& frame : report.at("frames")) {
+    EXPECT_TRUE(frame.at("ms").contains("all_draws"));
+    if (!frame.at("draws_spread").is_null()) ++with_spread;
+  }
+  EXPECT_EQ(with_spread, fused.size());
 }
 
 TEST_F(RunDrawsCli, AWrongCountSaysSoAndWritesNothing) {
