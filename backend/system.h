@@ -82,7 +82,8 @@ class System {
   TrackResult Track(const Frame& frame);
   // The same, with the frame's features computed already (ComputeFrameFeatures with rig() and
   // options().frontend): the same result, without detecting the images again. How
-  // SystemEnsemble shares one detection between its draws.
+  // SystemEnsemble shares one detection between its draws. Throws dala::Error, with nothing
+  // changed, also for features of another frame (Frontend::Process).
   TrackResult Track(const Frame& frame, const FrameFeatures& features);
   // Records a frame whose images could not be read (dala run skips such a frame): stats() report
   // it lost with `note`, and it gets no pose. Neither the frontend nor the estimator sees it: the

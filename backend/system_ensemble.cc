@@ -27,6 +27,8 @@ SystemEnsemble::SystemEnsemble(const StereoRig& rig, const SystemOptions& option
   for (int k = 0; k < ensemble.draws; ++k) {
     SystemOptions draw_options = options;
     draw_options.ransac_order_seed = options.ransac_order_seed + static_cast<uint64_t>(k);
+    // The stereo motion's P3P RANSAC draws from its own generator.
+    draw_options.frontend.motion.seed = options.frontend.motion.seed + static_cast<uint64_t>(k);
     draws_.push_back(std::make_unique<System>(rig, draw_options));
   }
   workers_.resize(std::min(ensemble.threads, ensemble.draws) - 1);
@@ -45,7 +47,16 @@ void SystemEnsemble::ForEachDraw(const Task& task) {
       }
     }
   };
-  for (int t = 1; t < threads; ++t) workers_[t - 1].Start([&run_thread, t] { run_thread(t); });
+  int started = 0;
+  try {
+    for (int t = 1; t < threads; ++t, ++started) {
+      workers_[t - 1].Start([&run_thread, t] { run_thread(t); });
+    }
+  } catch (...) {
+    // A worker that cannot start (no thread): the started ones still use this frame's locals.
+    for (int t = 0; t < started; ++t) workers_[t].Wait();
+    throw;
+  }
   run_thread(0);
   for (WorkerThread& w : workers_) w.Wait();
   for (const std::exception_ptr& e : errors) {
@@ -94,10 +105,10 @@ AlignmentType SystemEnsemble::FusionAlignment() const {
 }
 
 std::vector<int> SystemEnsemble::FusableDraws(const std::vector<Trajectory>& trajectories) const {
-  constexpr size_t kAlignmentPoses = 3;
+  const size_t alignment_poses = TrajectoryFusionOptions().min_common_stamps;
   std::vector<int> draws;
   for (size_t k = 0; k < trajectories.size(); ++k) {
-    if (trajectories[k].size() >= kAlignmentPoses) draws.push_back(static_cast<int>(k));
+    if (trajectories[k].size() >= alignment_poses) draws.push_back(static_cast<int>(k));
   }
   return draws;
 }
@@ -109,19 +120,19 @@ bool SystemEnsemble::Fuse(const std::vector<Trajectory>& trajectories,
     *why = "no draw to fuse";
     return false;
   }
-  if (draws.size() == 1) {
-    *fused = FusedTrajectory();
-    fused->trajectory = trajectories.at(draws.front());
-    fused->runs.assign(fused->trajectory.size(), 1);
-    fused->spread.assign(fused->trajectory.size(), 0.0);
-    fused->alignments.assign(1, Sim3Alignment());
-    return true;
-  }
   std::vector<Trajectory> runs;
   for (int k : draws) runs.push_back(trajectories.at(k));
   TrajectoryFusionOptions options;
   options.alignment = FusionAlignment();
-  return FuseTrajectories(runs, options, fused, why);
+  if (FuseTrajectories(runs, options, fused, why)) return true;
+  // FuseTrajectories counts its runs from 1: name them by their seeds.
+  std::string seeds;
+  for (size_t i = 0; i < draws.size(); ++i) {
+    seeds += (i > 0 ? ", " : "") + std::to_string(seed(draws[i]));
+  }
+  *why = "the draws of seeds " + seeds + " (runs 1-" + std::to_string(draws.size()) +
+         " in that order): " + *why;
+  return false;
 }
 
 }  // namespace dala

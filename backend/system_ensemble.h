@@ -24,12 +24,17 @@
 //   std::string why;
 //   if (!runs.Fuse(trajectories, runs.FusableDraws(trajectories), &fused, &why)) ...;
 //
-// Draw k is a System whose options are the given ones with ransac_order_seed + k: draw 0 is the
-// run the options alone give, and its world (the first frame's camera) and unit are the fused
-// trajectory's (when it has a trajectory). Draw k always runs on thread k % threads (the calling
-// thread is thread 0), and each System is deterministic, so the results do not depend on the number
-// of threads. Memory and work grow with the draws; the wall time per frame by the draws over the
-// threads.
+// Draw k is a System whose options are the given ones with ransac_order_seed + k and
+// frontend.motion.seed + k (every RANSAC of the run draws otherwise): draw 0 is the run the
+// options alone give, and its world (the first frame's camera) and unit are the fused
+// trajectory's (when it has a trajectory). Each System is deterministic, so the results do not
+// depend on the threads; draw k always runs on thread k % threads (the calling thread is thread
+// 0), so that a System's own worker threads are always started from one thread and its
+// thread-local scratch stays warm. Memory and work grow with the draws, the wall time per frame
+// by the draws over the threads (the frame's detection is shared). Track and Finish may throw
+// what System::Track and Finish throw: the errors that change nothing (a frame out of time
+// order, an image that does not suit the rig) leave every draw as it was; after any other
+// exception the draws may be out of step, and the ensemble should be discarded.
 
 #include <memory>
 #include <string>
@@ -83,8 +88,8 @@ class SystemEnsemble {
   // never initialised has none.
   std::vector<int> FusableDraws(const std::vector<Trajectory>& trajectories) const;
   // The trajectories of `draws` (non-empty, e.g. FusableDraws()) fused into the world and unit
-  // of the first of them. One draw: its trajectory as it is. Returns false and says why when
-  // they cannot be fused (fewer than 3 frames shared).
+  // of the first of them (FuseTrajectories). Returns false and says why, naming the draws by
+  // their seeds, when they cannot be fused (fewer than 3 frames shared).
   bool Fuse(const std::vector<Trajectory>& trajectories, const std::vector<int>& draws,
             FusedTrajectory* fused, std::string* why) const;
 

@@ -532,10 +532,18 @@ DetectedImage Frontend::Detect(const Frame& frame, bool stereo, TrackedFrame* cu
   const DetectedImage right =
       DetectImages(frame, stereo, options_.harris,
                    options_.parallel_detection ? &detection_worker_ : nullptr, &cur->detection);
+  StartTracks(cur);
+  return right;
+}
+
+void Frontend::StartTracks(TrackedFrame* cur) {
   const size_t n = cur->detection.points.size();
   cur->landmark.assign(n, LandmarkId());
   cur->track_length.assign(n, 1);
-  return right;
+}
+
+bool Frontend::PredictsBesideStereo(bool stereo) const {
+  return stereo && prev_ && options_.parallel_detection;
 }
 
 std::optional<std::vector<Match>> Frontend::AdoptFeatures(const FrameFeatures& features,
@@ -543,14 +551,13 @@ std::optional<std::vector<Match>> Frontend::AdoptFeatures(const FrameFeatures& f
   cur->detection = features.left;
   // The matcher's neighbour lists are computed on first use: each frontend its own.
   cur->detection.neighbour_cache = std::make_shared<NeighbourCache>();
-  const size_t n = cur->detection.points.size();
-  cur->landmark.assign(n, LandmarkId());
-  cur->track_length.assign(n, 1);
+  StartTracks(cur);
   cur->stereo = features.stereo ? features.stereo_points
-                                : std::vector<std::optional<StereoPoint>>(n, std::nullopt);
+                                : std::vector<std::optional<StereoPoint>>(
+                                      cur->detection.points.size(), std::nullopt);
   // As MatchStereoAndPredict: the first tracking attempt's matches made here only where it
   // makes them beside the stereo matching (the same matches TrackFromPrevious would make).
-  if (features.stereo && prev_ && options_.parallel_detection) {
+  if (PredictsBesideStereo(features.stereo)) {
     return MatchTemporal(*prev_, cur->detection, &velocity_T_prev_cur_);
   }
   return std::nullopt;
@@ -561,7 +568,7 @@ std::optional<std::vector<Match>> Frontend::MatchStereoAndPredict(const Frame& f
                                                                   TrackedFrame* cur) {
   cur->stereo.assign(cur->detection.points.size(), std::nullopt);
   std::optional<std::vector<Match>> predicted_matches;
-  const bool overlap = stereo && prev_ && options_.parallel_detection;
+  const bool overlap = PredictsBesideStereo(stereo);
   if (overlap) {
     detection_worker_.Start(
         [&] { predicted_matches = MatchTemporal(*prev_, cur->detection, &velocity_T_prev_cur_); });
@@ -707,9 +714,15 @@ FrameMeasurement Frontend::Process(const Frame& frame, const FrameFeatures& feat
 FrameMeasurement Frontend::ProcessFrame(const Frame& frame, const FrameFeatures* features) {
   CheckFrameSuitsRig(frame, rig_);
   const bool stereo = rig_.is_stereo() && !frame.right.empty();
-  CHECK(features == nullptr || (features->frame == frame.id && features->stereo == stereo))
-      << "the features of frame " << features->frame.value << " given with frame "
-      << frame.id.value;
+  if (features != nullptr && (features->frame != frame.id || features->stereo != stereo ||
+                              features->left.image_size != frame.left.size())) {
+    throw Error() << "the features given with frame " << frame.id.value << " are those of frame "
+                  << features->frame.value << " (" << (features->stereo ? "stereo" : "one camera")
+                  << ", " << features->left.image_size.width << "x"
+                  << features->left.image_size.height
+                  << "): compute them from this frame with this frontend's rig "
+                     "(ComputeFrameFeatures)";
+  }
   const auto t_start = Clock::now();
   FrameMeasurement out;
   out.frame = frame.id;
@@ -723,8 +736,9 @@ FrameMeasurement Frontend::ProcessFrame(const Frame& frame, const FrameFeatures*
   std::optional<std::vector<Match>> predicted_matches;
   auto t0 = Clock::now();
   if (features != nullptr) {
-    // Computed already (ComputeFrameFeatures): their times are this frame's too.
-    out.timings.detect_ms = features->detect_ms;
+    // Computed already (ComputeFrameFeatures): their times are this frame's too (and in
+    // total_ms below).
+    out.timings.detect_ms = features->detect_ms + MsSince(t_start);
     predicted_matches = AdoptFeatures(*features, &cur);
     out.timings.stereo_ms = features->stereo_ms + MsSince(t0);
   } else {
@@ -783,7 +797,8 @@ FrameMeasurement Frontend::ProcessFrame(const Frame& frame, const FrameFeatures*
     frames_since_keyframe_ = 0;
   }
   prev_ = std::move(cur);
-  out.timings.total_ms = MsSince(t_start);
+  out.timings.total_ms =
+      MsSince(t_start) + (features != nullptr ? features->detect_ms + features->stereo_ms : 0.0);
   return out;
 }
 

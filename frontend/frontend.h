@@ -103,9 +103,9 @@ struct FrameFeatures {
   double detect_ms = 0.0, stereo_ms = 0.0;                // The time it took, per step.
 };
 
-// Computes a frame's features as Frontend::Process would: `helper` (optional) detects the right
-// image beside the left one, or the left image's pyramid levels for one camera. Throws as
-// CheckFrameSuitsRig does.
+// Computes a frame's features as Frontend::Process would: `helper` (optional; used only with
+// options.parallel_detection) detects the right image beside the left one, or helps with the
+// left image's pyramid levels for one camera. Throws as CheckFrameSuitsRig does.
 FrameFeatures ComputeFrameFeatures(const Frame& frame, const StereoRig& rig,
                                    const FrontendOptions& options, WorkerThread* helper);
 
@@ -117,7 +117,10 @@ class Frontend {
   // size: CheckFrameSuitsRig throws dala::Error otherwise, before anything changes.
   FrameMeasurement Process(const Frame& frame);
   // The same, with the frame's features computed already (ComputeFrameFeatures with this
-  // frontend's rig and options): the same measurement, without detecting the images again.
+  // frontend's rig and options): the same measurement, without detecting the images again; its
+  // timings count the features' time. Throws dala::Error, before anything changes, for
+  // features of another frame or image size. Features computed with other Harris or stereo
+  // options are the caller's mistake, not detected.
   FrameMeasurement Process(const Frame& frame, const FrameFeatures& features);
 
   // Pose of the current camera obtained by chaining the visual motion estimates from the first
@@ -176,6 +179,11 @@ class Frontend {
   void FollowEstimator();
   // Detects the left image into *cur (its landmarks unset) and returns the right image's points.
   DetectedImage Detect(const Frame& frame, bool stereo, TrackedFrame* cur);
+  // Every point of *cur without a landmark yet, its track one frame long.
+  void StartTracks(TrackedFrame* cur);
+  // Whether the first tracking attempt's temporal matches are made on the worker beside the
+  // stereo matching (MatchStereoAndPredict).
+  bool PredictsBesideStereo(bool stereo) const;
   // The same from features computed already: *cur gets their left points (with a cache of its
   // own) and stereo matches, and the temporal matches are predicted as
   // MatchStereoAndPredict would (returned).

@@ -11,8 +11,8 @@ runs' report.json gives every draw's ATE (summary.draws.per_draw) and the fused 
 median and worst ATE of draw 0 (the run without --draws), of every draw alone (all draws of all
 runs) and of the fused trajectories; the geometric mean of fused / the run's median draw and of
 fused / draw 0, with the standard error of the mean log ratio; and how often draw 0 was the
-best of its run's draws (by chance: one run in N). Runs without an evaluation are left out and
-counted. With --write, the table replaces the text between `<!-- MARKER:begin -->` and
+best of its run's draws (by chance: one run in N). Runs without an evaluation, or whose draws
+were not all fused, are left out and counted; a run without a report.json is not seen. With --write, the table replaces the text between `<!-- MARKER:begin -->` and
 `<!-- MARKER:end -->` of that file. Standard library only.
 """
 import argparse
@@ -37,7 +37,9 @@ def load(bench_dir, config):
         if draws is None:
             raise SystemExit("%s: no summary.draws: was %s run with --draws N > 1?" % (path, config))
         ates = [d["ate_rmse"] for d in draws["per_draw"]]
-        if "ate" not in summary or any(a is None for a in ates):
+        # Left out: no evaluation, or the draws were not all fused (summary.ate is then one
+        # draw's, not a fusion of them all).
+        if "ate" not in summary or any(a is None for a in ates) or draws["fused"] != len(ates):
             left_out[sequence] = left_out.get(sequence, 0) + 1
             continue
         runs.setdefault(sequence, []).append((ates, summary["ate"]["rmse"]))

@@ -302,6 +302,30 @@ std::vector<RefinementSummary> Refine(SystemEnsemble* runs, const FramesRun& run
   return refinements;
 }
 
+// DIR/draws holds the trajectory of each draw of this run (--draws N > 1) and nothing else: the
+// files of an earlier run into the same folder (other seeds, or no --draws) are removed before
+// anything is written.
+void PrepareDrawsFolder(const std::string& dir, int draws) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::path(dir) / "draws";
+  std::error_code error;
+  if (fs::is_directory(folder)) {
+    for (const fs::directory_entry& e : fs::directory_iterator(folder)) {
+      const std::string name = e.path().filename().string();
+      if (name.rfind("seed_", 0) == 0 && e.path().extension() == ".txt")
+        fs::remove(e.path(), error);
+    }
+    if (draws == 1) fs::remove(folder, error);  // Only when empty.
+  }
+  if (draws > 1) CreateDirectories(folder.string());
+}
+
+// How a run is evaluated against its ground truth: by a similarity for one camera (its unit is
+// its own), rigidly otherwise.
+AlignmentType EvaluationAlignment(const SystemOptions& options) {
+  return options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
+}
+
 // --draws N: the trajectory written is the draws' fusion (SystemEnsemble::Fuse), in the world
 // and unit of the first draw that has one (the reference: its map, report and per-frame
 // statistics are the ones written).
@@ -311,6 +335,9 @@ struct DrawsResult {
   FusedTrajectory fused;
   std::string not_fused;  // Why the draws could not be fused (empty: fused, or one draw).
   Trajectory trajectory, online_trajectory;
+
+  // The trajectory written is a fusion of two draws or more.
+  bool fused_several() const { return not_fused.empty() && fused_draws.size() > 1; }
 };
 
 DrawsResult FuseDraws(const SystemEnsemble& runs, const std::vector<Trajectory>& final_runs,
@@ -344,7 +371,7 @@ DrawsResult FuseDraws(const SystemEnsemble& runs, const std::vector<Trajectory>&
 void AddDrawsToFrames(const SystemEnsemble& runs, const DrawsResult& draws,
                       const std::vector<FrameStats>& stats, nlohmann::json* frames) {
   std::map<int64_t, double> spread_at;
-  if (draws.not_fused.empty() && draws.fused_draws.size() > 1) {
+  if (draws.fused_several()) {
     for (size_t i = 0; i < draws.fused.trajectory.size(); ++i) {
       spread_at[draws.fused.trajectory.poses[i].t_ns] = draws.fused.spread[i];
     }
@@ -369,7 +396,7 @@ nlohmann::json DrawsJson(const SystemEnsemble& runs, const std::vector<Trajector
   nlohmann::json per_draw = nlohmann::json::array();
   const auto& gt = dataset.ground_truth();
   EvalOptions eval;
-  eval.alignment = options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
+  eval.alignment = EvaluationAlignment(options);
   for (int k = 0; k < runs.size(); ++k) {
     nlohmann::json d = {{"seed", runs.seed(k)}, {"frames_with_pose", final_runs[k].size()}};
     std::optional<double> ate;
@@ -380,28 +407,36 @@ nlohmann::json DrawsJson(const SystemEnsemble& runs, const std::vector<Trajector
     d["ate_rmse"] = JsonOrNull(ate);
     const auto fused_at = std::find(draws.fused_draws.begin(), draws.fused_draws.end(), k) -
                           draws.fused_draws.begin();
-    const bool fused = draws.not_fused.empty() && draws.fused_draws.size() > 1 &&
-                       fused_at < static_cast<long>(draws.fused_draws.size());
-    d["fused"] = fused;
+    const bool in_fusion =
+        draws.fused_several() && fused_at < static_cast<long>(draws.fused_draws.size());
+    d["in_fusion"] = in_fusion;
     d["scale_onto_fused"] = JsonOrNull(
-        fused ? std::optional<double>(draws.fused.alignments[fused_at].scale) : std::nullopt);
+        in_fusion ? std::optional<double>(draws.fused.alignments[fused_at].scale) : std::nullopt);
     per_draw.push_back(d);
   }
-  const bool fused = draws.not_fused.empty() && draws.fused_draws.size() > 1;
-  const ErrorStatistics spread =
-      ComputeStatistics(fused ? draws.fused.spread : std::vector<double>());
-  return {{"count", runs.size()},
-          {"threads", threads},
-          {"reference_seed", runs.seed(draws.reference)},
-          {"fused", fused ? static_cast<int>(draws.fused_draws.size()) : 0},
-          {"alignment", AlignmentTypeName(runs.FusionAlignment())},
-          {"not_fused",
-           draws.not_fused.empty() ? nlohmann::json(nullptr) : nlohmann::json(draws.not_fused)},
-          // RMS distance of the fused draws' aligned positions from their mean, per frame (the
-          // reference's unit).
-          {"spread_median", fused ? nlohmann::json(spread.median) : nlohmann::json(nullptr)},
-          {"spread_max", fused ? nlohmann::json(spread.max) : nlohmann::json(nullptr)},
-          {"per_draw", per_draw}};
+  // The spread where two draws or more have the frame (one alone has none).
+  std::vector<double> spread_values;
+  if (draws.fused_several()) {
+    for (size_t i = 0; i < draws.fused.spread.size(); ++i) {
+      if (draws.fused.runs[i] > 1) spread_values.push_back(draws.fused.spread[i]);
+    }
+  }
+  const ErrorStatistics spread = ComputeStatistics(spread_values);
+  const bool with_spread = !spread_values.empty();
+  return {
+      {"count", runs.size()},
+      {"threads", threads},
+      {"reference_seed", runs.seed(draws.reference)},
+      {"fused", draws.fused_several() ? static_cast<int>(draws.fused_draws.size()) : 0},
+      {"alignment", AlignmentTypeName(runs.FusionAlignment())},
+      {"not_fused",
+       draws.not_fused.empty() ? nlohmann::json(nullptr) : nlohmann::json(draws.not_fused)},
+      // RMS distance of the fused draws' aligned positions from their mean, over the frames
+      // two draws or more have (the reference's unit).
+      {"spread_median",
+       JsonOrNull(with_spread ? std::optional<double>(spread.median) : std::nullopt)},
+      {"spread_max", JsonOrNull(with_spread ? std::optional<double>(spread.max) : std::nullopt)},
+      {"per_draw", per_draw}};
 }
 
 // Writing the outputs: each file is written to a temporary and renamed, so none is ever half
@@ -560,33 +595,38 @@ std::string LoopsNotClosedNote(const System& system) {
 void PrintDraws(const nlohmann::json& draws, std::ostream& out) {
   const nlohmann::json& per_draw = draws["per_draw"];
   const int fused = draws["fused"].get<int>();
-  out << "draws       " << per_draw.size() << " runs (ransac_order_seed "
-      << per_draw.front()["seed"].get<uint64_t>() << "-" << per_draw.back()["seed"].get<uint64_t>()
-      << "); ";
+  const std::string reference = "seed " + std::to_string(draws["reference_seed"].get<uint64_t>());
+  std::ostringstream line;  // Its own number format, not the caller's.
+  line << "draws       " << per_draw.size() << " runs (ransac_order_seed "
+       << per_draw.front()["seed"].get<uint64_t>() << "-" << per_draw.back()["seed"].get<uint64_t>()
+       << "); ";
   if (fused > 1) {
-    out << fused << " fused by " << draws["alignment"].get<std::string>() << " into draw "
-        << draws["reference_seed"].get<uint64_t>() << "'s world: spread " << std::setprecision(3)
-        << draws["spread_median"].get<double>() << " median, " << draws["spread_max"].get<double>()
-        << " max (RMS distance of the draws from their mean)\n";
+    line << fused << " fused by " << draws["alignment"].get<std::string>() << " into the world of "
+         << reference << ": spread " << std::setprecision(3) << draws["spread_median"].get<double>()
+         << " median, " << draws["spread_max"].get<double>()
+         << " max (RMS distance of the draws from their mean, "
+         << "in its unit)\n";
   } else if (!draws["not_fused"].is_null()) {
-    out << "not fused: " << draws["not_fused"].get<std::string>() << "; the trajectory is draw "
-        << draws["reference_seed"].get<uint64_t>() << "'s\n";
+    line << "not fused: " << draws["not_fused"].get<std::string>() << "; the trajectory is "
+         << reference << "'s\n";
   } else {
-    out << "not fused: fewer than two draws have a trajectory; the trajectory is draw "
-        << draws["reference_seed"].get<uint64_t>() << "'s\n";
+    line << "not fused: fewer than two draws have a trajectory; the trajectory is " << reference
+         << "'s\n";
   }
   bool any_ate = false;
   for (const auto& d : per_draw) any_ate = any_ate || !d["ate_rmse"].is_null();
-  if (!any_ate) return;
-  out << "            ATE per draw";
-  for (const auto& d : per_draw) {
-    if (d["ate_rmse"].is_null()) {
-      out << " -";
-    } else {
-      out << " " << std::fixed << std::setprecision(4) << d["ate_rmse"].get<double>();
+  if (any_ate) {
+    line << "            ATE per draw" << std::fixed << std::setprecision(4);
+    for (const auto& d : per_draw) {
+      if (d["ate_rmse"].is_null()) {
+        line << " -";
+      } else {
+        line << " " << d["ate_rmse"].get<double>();
+      }
     }
+    line << " m (each alone; draws/seed_K.txt)\n";
   }
-  out << " m (each alone; draws/seed_K.txt)\n";
+  out << line.str();
 }
 
 // The summary `dala run` prints (and report.html shows).
@@ -634,7 +674,7 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
   if (draws != nullptr) PrintDraws(*draws, out);
   if (summary.contains("ate")) {
     out << "ATE rmse    " << std::setprecision(4) << summary["ate"]["rmse"].get<double>() << " m ("
-        << (options.mode == "mono" ? "sim3" : "se3") << " alignment"
+        << AlignmentTypeName(EvaluationAlignment(options)) << " alignment"
         << (refinement.done ? ", after the global BA" : "")
         << (draws != nullptr && (*draws)["fused"].get<int>() > 1
                 ? ", the " + std::to_string((*draws)["fused"].get<int>()) + " draws fused"
@@ -704,7 +744,7 @@ RunEvaluation EvaluateRun(const Dataset& dataset, const Trajectory& trajectory,
   const auto& gt = dataset.ground_truth();
   if (!gt || gt->empty()) return out;
   EvalOptions eval;
-  eval.alignment = options.mode == "mono" ? AlignmentType::kSim3 : AlignmentType::kSE3;
+  eval.alignment = EvaluationAlignment(options);
   out.result = Evaluate(*gt, trajectory, eval);
   const EvalResult& result = *out.result;
   const nlohmann::json e = EvalResultToJson(result);
@@ -772,6 +812,7 @@ int RunRun(const std::vector<std::string>& args) {
     throw Error() << "--threads " << FLAGS_threads << ": give 0 (one per core) or more";
   std::unique_ptr<Dataset> dataset = OpenDataset(args[0], DatasetOptionsFromFlags(options));
   CreateDirectories(FLAGS_out);
+  PrepareDrawsFolder(FLAGS_out, FLAGS_draws);
 
   SystemEnsembleOptions ensemble_options;
   ensemble_options.draws = FLAGS_draws;
@@ -820,7 +861,6 @@ int RunRun(const std::vector<std::string>& args) {
       WriteTrajectoryAndMap(system, trajectory, draws.online_trajectory, refinement.done, dir);
   const size_t landmarks = map_points.size();
   if (runs.size() > 1) {
-    CreateDirectories(dir + "/draws");
     for (int k = 0; k < runs.size(); ++k) {
       WriteTrajectoryTum(dir + "/draws/seed_" + std::to_string(runs.seed(k)) + ".txt",
                          final_runs[k]);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/geometry.h"
 #include "core/sim/synthetic_sequence.h"
 #include "tests/test_util.h"
 
@@ -58,6 +59,7 @@ std::vector<Trajectory> ExpectDrawsAreRunsAlone(const sim::SyntheticSequence& se
   for (int k = 0; k < draws; ++k) {
     SystemOptions o = options;
     o.ransac_order_seed = options.ransac_order_seed + k;
+    o.frontend.motion.seed = options.frontend.motion.seed + k;
     alone.push_back(std::make_unique<System>(seq.rig(), o));
   }
   for (size_t i = 0; i < seq.size(); ++i) {
@@ -118,7 +120,8 @@ TEST(SystemEnsemble, OneDrawIsItsOwnTrajectory) {
   const sim::SyntheticSequence seq(ShortRover());
   const SystemEnsemble runs(seq.rig(), Mono(0), Draws(2, 1));
   Trajectory some;
-  for (int i = 0; i < 5; ++i) some.Add(i * 1000, Pose::Identity());
+  for (int i = 0; i < 5; ++i)
+    some.Add(i * 1000, MakePose(Eigen::Matrix3d::Identity(), Eigen::Vector3d(i, 0.1 * i * i, 0.0)));
   const std::vector<Trajectory> trajectories = {Trajectory(), some};
   const std::vector<int> fusable = runs.FusableDraws(trajectories);
   ASSERT_EQ(fusable, std::vector<int>{1});
@@ -159,6 +162,18 @@ TEST(SystemEnsemble, MistakesAreErrorsThatChangeNothing) {
   EXPECT_NE(error.find("comes before the previous frame"), std::string::npos) << error;
   runs.Track(seq.Render(2));
   for (int k = 0; k < runs.size(); ++k) EXPECT_EQ(runs.draw(k).stats().size(), 3u);
+
+  // A System given the features of another frame refuses them, and goes on.
+  System alone(seq.rig(), Mono(0));
+  alone.Track(seq.Render(0));
+  const Frame next = seq.Render(1);
+  const FrameFeatures of_frame_0 =
+      ComputeFrameFeatures(seq.Render(0), alone.rig(), alone.options().frontend, nullptr);
+  const std::string wrong = testing::ErrorOf([&] { alone.Track(next, of_frame_0); });
+  EXPECT_NE(wrong.find("the features given with frame 1 are those of frame 0"), std::string::npos)
+      << wrong;
+  alone.Track(next, ComputeFrameFeatures(next, alone.rig(), alone.options().frontend, nullptr));
+  EXPECT_EQ(alone.stats().size(), 2u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -49,11 +50,15 @@ TempDir* RunDrawsCli::data_ = nullptr;
 TEST_F(RunDrawsCli, ThreeDrawsFusedAndEachWritten) {
   const auto plain = Run("", "plain");
   ASSERT_EQ(plain.status, 0) << plain.log();
+  // A draw of an earlier run into the same folder, which this run does not have.
+  std::filesystem::create_directories(dir_ / "draws/draws");
+  std::ofstream(dir_ / "draws/draws/seed_7.txt") << "0 0 0 0 0 0 0 1\n";
   const auto r = Run("--draws 3 --threads 2", "draws");
   ASSERT_EQ(r.status, 0) << r.log();
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "draws/draws/seed_7.txt"));
   EXPECT_THAT(r.err, HasSubstr("3 draws (ransac_order_seed 0-2) on 2 threads"));
   EXPECT_THAT(r.out, HasSubstr("draws       3 runs (ransac_order_seed 0-2); 3 fused by sim3 into "
-                               "draw 0's world"));
+                               "the world of seed 0"));
   EXPECT_THAT(r.out, HasSubstr("the 3 draws fused)"));
 
   // Draw 0 is the run without --draws.

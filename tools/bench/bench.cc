@@ -53,11 +53,14 @@ nlohmann::json RunSpec(const BenchRun& run) {
                                             : nlohmann::json{{"path", s.path}};
   // Only for start variants, so that the markers of runs without starts stay valid.
   if (run.has_start()) sequence["first_frame"] = run.first_frame;
-  return {{"sequence", sequence},
-          {"estimator", c.estimator},
-          {"mode", c.mode},
-          {"config", c.config_file},
-          {"set", c.set}};
+  nlohmann::json spec = {{"sequence", sequence},
+                         {"estimator", c.estimator},
+                         {"mode", c.mode},
+                         {"config", c.config_file},
+                         {"set", c.set}};
+  // Likewise only when given, for the markers of the runs without it.
+  if (c.draws > 1) spec["draws"] = c.draws;
+  return spec;
 }
 
 std::optional<nlohmann::json> ReadJsonFile(const std::string& path) {

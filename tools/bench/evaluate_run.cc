@@ -54,7 +54,10 @@ bool ReadReport(const std::string& path, BenchRunResult* r, RunSeries* series) {
   int lost = 0;
   if (report.contains("frames") && report["frames"].is_array()) {
     for (const nlohmann::json& f : report["frames"]) {
-      const std::optional<double> total = NumberAt(f, {"ms", "total"});
+      // `dala run --draws`: the wall time of every draw is the run's time for the frame.
+      const std::optional<double> total = NumberAt(f, {"ms", "all_draws"})
+                                              ? NumberAt(f, {"ms", "all_draws"})
+                                              : NumberAt(f, {"ms", "total"});
       if (f.contains("status") && f["status"] == "lost") ++lost;
       if (!total) continue;
       series->frame.push_back(NumberAt(f, {"frame"}).value_or(series->frame.size()));

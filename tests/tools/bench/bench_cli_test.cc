@@ -226,8 +226,18 @@ TEST_F(BenchCli, ResumesFinishedRunsAndForceRerunsThem) {
   ASSERT_EQ(BenchSuite(out).status, 0);
   EXPECT_EQ(CountLines(out + "/run_calls.txt"), 18 + 2 + 6);  // extra x 2 + the not-ok again.
 
+  // Nor is one whose draws changed (`dala run --draws`).
+  std::string suite = testing::ReadAll(suite_);
+  const std::string before = "{name: ba-stereo, estimator: ba, mode: stereo}";
+  ASSERT_NE(suite.find(before), std::string::npos);
+  suite.replace(suite.find(before), before.size(),
+                "{name: ba-stereo, estimator: ba, mode: stereo, draws: 2}");
+  std::ofstream(suite_) << suite;
+  ASSERT_EQ(BenchSuite(out).status, 0);
+  EXPECT_EQ(CountLines(out + "/run_calls.txt"), 26 + 2 + 6);  // ba-stereo x 2 + the not-ok.
+
   ASSERT_EQ(BenchSuite(out, "--force").status, 0);
-  EXPECT_EQ(CountLines(out + "/run_calls.txt"), 26 + 14);
+  EXPECT_EQ(CountLines(out + "/run_calls.txt"), 34 + 14);
   EXPECT_NE(fs::last_write_time(marker), stamp);
 }
 
