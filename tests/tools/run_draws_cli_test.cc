@@ -100,6 +100,22 @@ TEST_F(RunDrawsCli, ThreeDrawsFusedAndEachWritten) {
   EXPECT_EQ(with_spread, fused.size());
 }
 
+// Two frames: no draw of one camera has started a map. The run says the draws were not fused,
+// writes its files (an empty trajectory, each draw's) and exits 0.
+TEST_F(RunDrawsCli, DrawsWithoutATrajectoryAreNotFusedAndSaySo) {
+  const auto r = Run("--draws 2 --max_frames 2", "short");
+  ASSERT_EQ(r.status, 0) << r.log();
+  EXPECT_THAT(r.out, HasSubstr("not fused: fewer than two draws have a trajectory; the "
+                               "trajectory is seed 0's"));
+  const nlohmann::json draws =
+      nlohmann::json::parse(ReadAll(dir_ / "short/report.json")).at("summary").at("draws");
+  EXPECT_EQ(draws.at("fused").get<int>(), 0);
+  EXPECT_TRUE(draws.at("spread_median").is_null());
+  for (const nlohmann::json& d : draws.at("per_draw")) EXPECT_FALSE(d.at("in_fusion").get<bool>());
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "short/trajectory.txt"));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "short/draws/seed_1.txt"));
+}
+
 TEST_F(RunDrawsCli, AWrongCountSaysSoAndWritesNothing) {
   for (const char* args : {"--draws 0", "--draws -2", "--draws 2 --threads -1"}) {
     const auto r = Run(args, "bad");
