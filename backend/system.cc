@@ -293,7 +293,11 @@ void System::SaveMap(const std::string& path) const {
   }
 }
 
-bool System::IsMetric() const { return ScaleDescription().rfind("metric", 0) == 0; }
+bool IsMetricScale(const std::string& scale_description) {
+  return scale_description.rfind("metric", 0) == 0;
+}
+
+bool System::IsMetric() const { return IsMetricScale(ScaleDescription()); }
 
 SavedMap System::LoadMap(const std::string& path) { return ReadMapFile(path); }
 

@@ -70,6 +70,10 @@ struct FrameStats {
 // that does not exist (e.g. "ba" + "mono"), saying which do.
 std::unique_ptr<Estimator> MakeEstimator(const StereoRig& rig, const SystemOptions& options);
 
+// Whether a ScaleDescription() (report.json's summary.scale_source) says the unit is the metre:
+// it starts with "metric".
+bool IsMetricScale(const std::string& scale_description);
+
 class System {
  public:
   // Throws dala::Error when the options are invalid or the rig does not suit the mode
@@ -142,7 +146,7 @@ class System {
   // or "arbitrary (monocular)" (one camera: the unit is the first two-view baseline; align with
   // Sim(3) to compare with a metric ground truth).
   std::string ScaleDescription() const;
-  // The map's unit is the metre (ScaleDescription() starts with "metric").
+  // The map's unit is the metre (IsMetricScale(ScaleDescription())).
   bool IsMetric() const;
   const Estimator& estimator() const { return *estimator_; }
 

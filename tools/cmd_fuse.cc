@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "backend/system.h"
 #include "core/error.h"
 #include "core/eval/statistics.h"
 #include "core/eval/trajectory_fusion.h"
@@ -53,7 +54,7 @@ RunInput ReadRunInput(const std::string& path) {
     try {
       const nlohmann::json j = nlohmann::json::parse(report);
       const std::string source = j.at("summary").at("scale_source").get<std::string>();
-      input.metric = source.rfind("metric", 0) == 0;
+      input.metric = IsMetricScale(source);
     } catch (const std::exception& e) {
       throw Error() << path << "/report.json: not a `dala run` report (" << e.what() << ")";
     }

@@ -340,8 +340,9 @@ struct DrawsResult {
   bool fused_several() const { return not_fused.empty() && fused_draws.size() > 1; }
 };
 
+// `refined`: a global refinement ran, so the online trajectories differ from the final ones.
 DrawsResult FuseDraws(const SystemEnsemble& runs, const std::vector<Trajectory>& final_runs,
-                      const std::vector<Trajectory>& online_runs) {
+                      const std::vector<Trajectory>& online_runs, bool refined) {
   DrawsResult r;
   r.fused_draws = runs.FusableDraws(final_runs);
   if (!r.fused_draws.empty()) r.reference = r.fused_draws.front();
@@ -353,6 +354,10 @@ DrawsResult FuseDraws(const SystemEnsemble& runs, const std::vector<Trajectory>&
     return r;
   }
   r.trajectory = r.fused.trajectory;
+  if (!refined) {
+    r.online_trajectory = r.trajectory;  // The same trajectories: the same fusion.
+    return r;
+  }
   FusedTrajectory online;
   std::string why;
   if (runs.Fuse(online_runs, r.fused_draws, &online, &why)) {
@@ -849,7 +854,10 @@ int RunRun(const std::vector<std::string>& args) {
   const std::vector<Trajectory> online_runs = runs.Trajectories();
   const std::vector<RefinementSummary> refinements = Refine(&runs, run, options);
   const std::vector<Trajectory> final_runs = runs.Trajectories();
-  const DrawsResult draws = FuseDraws(runs, final_runs, online_runs);
+  const DrawsResult draws =
+      FuseDraws(runs, final_runs, online_runs,
+                std::any_of(refinements.begin(), refinements.end(),
+                            [](const RefinementSummary& r) { return r.done; }));
   // The draw whose map, report and per-frame statistics are written (the only one by default).
   const System& system = runs.draw(draws.reference);
   const RefinementSummary& refinement = refinements[draws.reference];
