@@ -132,6 +132,7 @@ void VisitFrontend(FrontendOptions* f, OptionVisitor* v) {
   v->Field("keyframe", "max_distance_m", &k.max_distance_m);
   v->Field("keyframe", "min_parallax_px", &k.min_parallax_px);
   v->Field("keyframe", "min_frames", &k.min_frames);
+  v->Field("keyframe", "mono_parallax_without_rotation", &k.mono_parallax_without_rotation);
   v->EndExperimental();
   v->Field("frontend", "tracking_radius_px", &f->tracking_radius_px);
   v->Field("frontend", "local_map_search", &f->local_map.enable);

@@ -666,9 +666,17 @@ bool Frontend::DecideKeyframe(const TrackedFrame& cur, bool stereo, bool guided,
     kf_uv[keyframe_->landmark[i]] = keyframe_->detection.points[i].uv;
   }
   std::vector<double> parallax;
+  const bool unrotate = !stereo && options_.keyframe.mono_parallax_without_rotation;
+  const Eigen::Matrix3d R_cur_kf = cur.T_w_c.linear().transpose() * keyframe_->T_w_c.linear();
   for (size_t i = 0; i < cur.landmark.size(); ++i) {
     const auto it = kf_uv.find(cur.landmark[i]);
-    if (it != kf_uv.end()) parallax.push_back((cur.detection.points[i].uv - it->second).norm());
+    if (it == kf_uv.end()) continue;
+    Eigen::Vector2d from = it->second;
+    if (unrotate) {
+      Eigen::Vector2d rotated;
+      if (rig_.left.Project(R_cur_kf * rig_.left.Unproject(it->second), &rotated)) from = rotated;
+    }
+    parallax.push_back((cur.detection.points[i].uv - from).norm());
   }
   KeyframeEvidence evidence;
   evidence.frames_since_keyframe = frames_since_keyframe_;
