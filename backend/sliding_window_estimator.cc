@@ -503,8 +503,8 @@ int SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
     DeferFrameRefinement(reference_index + 1 + j, f);
     T_w_last = r.T_w_c;
   }
-  // The current keyframe's first frame (the bridge times its step from it). The reference has no
-  // entry: the earlier frames placed before it refer to it, so CullKeyframe scans from the start.
+  // The current keyframe's first frame (the bridge times its step from it). The reference has none
+  // (the earlier frames placed before it refer to it); neither pair keyframe is ever culled.
   first_frame_of_keyframe_[current] = frames_.size();
   frames_.push_back({init.current.t_ns, current, Pose::Identity(), true});
   T_w_prev_ = keyframe_poses_.at(current);
@@ -514,15 +514,18 @@ int SlidingWindowEstimator::StartMonoMap(const MonoInitialization& init) {
                        : InterpolatePose(Pose::Identity(), T_w_prev_,
                                          1.0 / static_cast<double>(init.between.size() + 1));
   RememberLastKeyframe(current, init.current);
-  // The pair's current frame has a pose: it is the map's last tracked frame, with the pair's mean
-  // velocity. A map lost from the frame after its pair on (the pair's points not found again) is
-  // then re-initialised after mono_reinit_after_lost_frames like any other, instead of waiting
-  // for a frame tracked in it that never comes.
+  // The pair's current frame is the map's last tracked frame, moving at the pair's mean velocity
+  // (world frame, per second): the keyframe bridge takes a lost frame's step length from it and
+  // the re-initialisation after mono_reinit_after_lost_frames places the new map from it, so a
+  // map whose pair the next frames do not find again is bridged or re-initialised like any other.
   Reinit tracked;
   tracked.t_ns = init.current.t_ns;
   tracked.T_w_c = T_w_prev_;
   const double pair_s = 1e-9 * static_cast<double>(init.current.t_ns - init.reference.t_ns);
-  if (pair_s > 0) tracked.velocity_w = (T_w_cur.translation() - T_w_ref.translation()) / pair_s;
+  if (pair_s > 0) {
+    tracked.velocity_w =
+        (T_w_prev_.translation() - keyframe_poses_.at(reference).translation()) / pair_s;
+  }
   last_tracked_ = tracked;
   return placed_before_reference;
 }

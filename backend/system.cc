@@ -116,6 +116,7 @@ TrackResult System::TrackFrame(const Frame& frame, const FrameFeatures* features
     local_map_handed_ = true;
     frontend_->SetLocalMap({frame.id, e.T_w_c, e.valid, std::move(e.local_map)});
   }
+  frontend_->SetEstimatorInitializing(e.initializing);
   if (m.loop && e.loop_refused) {
     frontend_->ReturnLoopIds(*m.loop);
     // The refused loop's old keyframe does not hold this keyframe's place (saved below).

@@ -145,6 +145,7 @@ void VisitFrontend(FrontendOptions* f, OptionVisitor* v) {
   v->Field("frontend", "local_map_radius_px", &f->local_map.radius_px);
   v->Field("frontend", "local_map_forget_after_frames", &f->local_map.forget_after_frames);
   v->Field("frontend", "mono_free_matching_below", &f->mono_free_matching_below);
+  v->Field("frontend", "mono_init_rematch", &f->mono_init_rematch);
   v->EndExperimental();
   PlaceRecognitionOptions& l = f->loop;
   v->Field("loop", "enable", &l.enable);

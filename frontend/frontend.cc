@@ -228,6 +228,25 @@ std::optional<MotionEstimate> Frontend::TrackFromPrevious(
       }
     }
   }
+  if (!rig_.is_stereo() && !from_map && estimator_initializing_ && best.motion &&
+      options_.mono_init_rematch) {
+    // One camera while the two-view initialisation waits: no point has a depth, so each was
+    // searched around where the constant rotation rate alone sends it. When the frame's own
+    // rotation differs from that prediction by more than half the search radius (the yaw rate
+    // changed: a turn's start or end), the points it sent farthest are not in the tracks and
+    // the reference frame's tracks thin out before the parallax is reached; matching again
+    // around the estimated rotation finds them (a point without depth moves with the rotation).
+    const Eigen::Matrix3d& R_est = best.motion->estimate.T_prev_cur.linear();
+    const double turned = LogSO3(prediction.linear().transpose() * R_est).norm();
+    if (turned > 0.5 * options_.tracking_radius_px / rig_.left.fx) {
+      Pose rotation = Pose::Identity();
+      rotation.linear() = R_est;
+      Attempt again = attempt_with(&rotation, std::nullopt);
+      if (again.motion && again.motion->estimate.inliers > best.motion->estimate.inliers) {
+        best = std::move(again);
+      }
+    }
+  }
   const std::vector<Match>& matches = best.matches;
   const std::vector<int>& corr_match = best.corr_match;
   std::optional<MotionResult>& motion = best.motion;
@@ -667,7 +686,9 @@ bool Frontend::DecideKeyframe(const TrackedFrame& cur, bool stereo, bool guided,
   }
   std::vector<double> parallax;
   const bool unrotate = !stereo && options_.keyframe.mono_parallax_without_rotation;
-  const Eigen::Matrix3d R_cur_kf = cur.T_w_c.linear().transpose() * keyframe_->T_w_c.linear();
+  const Eigen::Matrix3d R_cur_kf =
+      unrotate ? Eigen::Matrix3d(cur.T_w_c.linear().transpose() * keyframe_->T_w_c.linear())
+               : Eigen::Matrix3d::Identity();
   for (size_t i = 0; i < cur.landmark.size(); ++i) {
     const auto it = kf_uv.find(cur.landmark[i]);
     if (it == kf_uv.end()) continue;

@@ -67,6 +67,11 @@ struct FrontendOptions {
   // Frontend::TrackFromPrevious). KITTI 06 at 10 Hz keeps 17.8-40 % (starts 0..9), every 2nd / 3rd
   // frame of it 14-19 % / 10-14 %. 0: never.
   double mono_free_matching_below = 0.15;
+  // One camera while the estimator's two-view initialisation waits (SetEstimatorInitializing):
+  // match a frame again around its estimated rotation when that differs from the constant
+  // rotation rate's prediction by more than half tracking_radius_px (a change of yaw rate), and
+  // keep the matching with more inliers (docs/results.md, "stop 58").
+  bool mono_init_rematch = true;
   // Matches of points without depth must lie this close to their epipolar line (pixels).
   double epipolar_gate_px = 2.0;
   // Reprojection gate for the re-acquisition of lost landmarks from the last keyframe (pixels).
@@ -132,6 +137,9 @@ class Frontend {
   // The estimator's landmarks after the frame just processed (see local_map_search.h): the next
   // frame searches them around their predicted projections.
   void SetLocalMap(LocalMap map) { local_map_search_.SetLocalMap(std::move(map)); }
+  // Whether the estimator's last frame was still waiting for its first map (its two-view
+  // initialisation; EstimatorOutput::initializing). True until told otherwise.
+  void SetEstimatorInitializing(bool initializing) { estimator_initializing_ = initializing; }
   // Starts the run in a saved map (System::UseMap, before the first frame): its keyframes join
   // the place recognition for relocalisation, the new landmark ids start after the map's, and
   // every frame is relocalised against the database until the estimator reports one tracked
@@ -240,6 +248,7 @@ class Frontend {
   KeyframePolicy keyframe_policy_;
   PlaceRecognition place_recognition_;
   LocalMapSearch local_map_search_;
+  bool estimator_initializing_ = true;  // See SetEstimatorInitializing.
   WorkerThread detection_worker_;  // Detects the right image (persistent: keeps its scratch).
   std::optional<TrackedFrame> prev_;
   std::optional<TrackedFrame> keyframe_;

@@ -39,9 +39,10 @@ struct KeyframePolicyOptions {
   int max_frames = 10;
   double min_parallax_px = 1.0;  // ...for the frame-count criterion (see above).
   int min_frames = 1;
-  // One camera: the parallax criterion measures only the image motion the rotation since the
-  // keyframe does not explain (the keyframe's pixel turned by R_cur_kf: the translation's share).
-  // Fewer keyframes through turns; measured, not the default (docs/results.md, "stop 58").
+  // One camera: the parallax (for max_parallax_px and min_parallax_px alike) is only the image
+  // motion the rotation since the keyframe does not explain (the keyframe's pixel turned by
+  // R_cur_kf first: the translation's share). Fewer keyframes through turns; measured, not the
+  // default (docs/results.md, "stop 58").
   bool mono_parallax_without_rotation = false;
 
   bool IsValid(std::string* why) const;

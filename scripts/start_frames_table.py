@@ -51,7 +51,6 @@ def path_lengths(poses_txt):
 
 def row(mode, clip, runs, cumulative):
     ates = [r[1] for r in runs if not math.isnan(r[1])]
-    failed = len(runs) - len(ates)
     worst = max(ates) if ates else float("nan")
     percent = ""
     if cumulative and ates:
@@ -61,7 +60,8 @@ def row(mode, clip, runs, cumulative):
         percent = " (%.3f %%)" % worst_percent
     return "| %s | %s | %d | %.4f | %.4f%s | %d | %.0f |" % (
         mode, clip, len(runs), statistics.median(ates) if ates else float("nan"), worst, percent,
-        sum(r[2] == r[3] for r in runs) - failed, statistics.median(r[4] for r in runs))
+        sum(r[2] == r[3] and not math.isnan(r[1]) for r in runs),
+        statistics.median(r[4] for r in runs))
 
 
 def main():
