@@ -70,8 +70,8 @@ struct FrontendOptions {
   // One camera while the estimator's two-view initialisation waits (SetEstimatorInitializing):
   // match a frame again around its estimated rotation when that differs from the constant
   // rotation rate's prediction by more than half tracking_radius_px (a change of yaw rate), and
-  // keep the matching with more inliers (docs/results.md, "stop 58").
-  bool mono_init_rematch = true;
+  // keep the matching with more inliers. Measured, not the default (docs/results.md, "stop 58").
+  bool mono_init_rematch = false;
   // Matches of points without depth must lie this close to their epipolar line (pixels).
   double epipolar_gate_px = 2.0;
   // Reprojection gate for the re-acquisition of lost landmarks from the last keyframe (pixels).
