@@ -138,7 +138,7 @@ TEST(KittiYawMonoE2e, AMapWhosePairIsNotFoundAgainIsBridgedNotLost) {
 // changes fast (A = 9 deg, P = 14 frames: up to 3.9 deg per frame, changing by up to 1.7 deg from
 // one frame to the next), a frame whose rotation is off that prediction by more than half the
 // radius is matched again around its estimated rotation (frontend.mono_init_rematch=1, off by
-// default: it changes the rendered fast preset's start, docs/results.md "stop 58"), so the
+// default: the rendered fast preset's jerky starts get worse, docs/results.md "stop 58"), so the
 // reference frame keeps its tracks until the parallax is there. At RANSAC draw 1 from starts
 // 0..9: every frame has a pose (without the second matching, the maps of starts 1, 8 and 9 start
 // 2-4 frames late and start 8 ends at 0.338 m); worst Sim(3) ATE bound 1.5x the measured.
