@@ -16,8 +16,9 @@ KIND (every image of SRC, left and right alike unless said):
   blur          horizontal motion blur of 1-9 px, drawn per frame
   drop          4 frames of the middle left out (a recorder that dropped them: the times keep
                 their gap)
-  stop          the car stands still for 15 frames at frame 25 (that frame repeated, every copy
-                with fresh N(0, 2^2) sensor noise; the times renumbered at 10 Hz)
+  stop          the car stands still for 15 frames at frame 25 (that frame repeated; every image
+                of the folder gets fresh N(0, 2^2) sensor noise, so the copies differ; the
+                times renumbered at 10 Hz)
 Pixels are clipped to [0, 255]. DST holds image_0/ (and image_1/ when SRC has it), calib.txt,
 poses.txt and times.txt; it is written as DST.partial and renamed when complete. Deterministic
 for a seed. Needs numpy and OpenCV's Python module (Debian: python3-numpy python3-opencv).
@@ -51,31 +52,8 @@ def frame_order(kind, n, rng):
     return list(range(n))
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("src", help="a KITTI sequence folder (image_0/, [image_1/,] calib.txt, "
-                    "poses.txt, times.txt)")
-    ap.add_argument("dst", help="the folder to write (must not exist)")
-    ap.add_argument("--kind", required=True, choices=KINDS)
-    ap.add_argument("--seed", type=int, default=1)
-    a = ap.parse_args()
-    if os.path.exists(a.dst):
-        sys.exit(f"{a.dst} exists: give a new folder")
-    cams = [c for c in ("image_0", "image_1") if os.path.isdir(os.path.join(a.src, c))]
-    if "image_0" not in cams:
-        sys.exit(f"{a.src} has no image_0/: give a KITTI sequence folder")
-    names = sorted(n for n in os.listdir(os.path.join(a.src, "image_0")) if n.endswith(".png"))
-    with open(os.path.join(a.src, "poses.txt")) as f:
-        poses = [line.strip() for line in f if line.strip()]
-    with open(os.path.join(a.src, "times.txt")) as f:
-        times = [line.strip() for line in f if line.strip()]
-    if not (len(names) == len(poses) == len(times)):
-        sys.exit(f"{a.src}: {len(names)} images, {len(poses)} poses, {len(times)} times")
-    rng = np.random.default_rng(a.seed)
-    order = frame_order(a.kind, len(names), rng)
-
-    tmp = a.dst + ".partial"
-    shutil.rmtree(tmp, ignore_errors=True)
+def write(a, tmp, cams, names, poses, times, order, rng):
+    """Writes the stressed folder into tmp."""
     for cam in cams:
         os.makedirs(os.path.join(tmp, cam))
     shutil.copy(os.path.join(a.src, "calib.txt"), os.path.join(tmp, "calib.txt"))
@@ -86,8 +64,7 @@ def main():
             path = os.path.join(a.src, cam, names[i])
             image = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
             if image is None:
-                shutil.rmtree(tmp, ignore_errors=True)
-                sys.exit(f"cannot read {path}")
+                raise SystemExit(f"cannot read {path}")
             im = image.astype(np.float32)
             if a.kind == "gain":
                 im *= gain
@@ -109,8 +86,7 @@ def main():
                 im += rng.normal(0.0, 2.0, im.shape)
             out = np.clip(im + 0.5, 0, 255).astype(np.uint8)
             if not cv2.imwrite(os.path.join(tmp, cam, f"{j:06d}.png"), out):
-                shutil.rmtree(tmp, ignore_errors=True)
-                sys.exit(f"cannot write {tmp}/{cam}/{j:06d}.png")
+                raise SystemExit(f"cannot write {tmp}/{cam}/{j:06d}.png")
     with open(os.path.join(tmp, "poses.txt"), "w") as f:
         f.write("".join(poses[i] + "\n" for i in order))
     with open(os.path.join(tmp, "times.txt"), "w") as f:
@@ -118,6 +94,44 @@ def main():
             f.write("".join(f"{0.1 * j:e}\n" for j in range(len(order))))
         else:
             f.write("".join(times[i] + "\n" for i in order))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("src", help="a KITTI sequence folder (image_0/, [image_1/,] calib.txt, "
+                    "poses.txt, times.txt)")
+    ap.add_argument("dst", help="the folder to write (must not exist)")
+    ap.add_argument("--kind", required=True, choices=KINDS)
+    ap.add_argument("--seed", type=int, default=1)
+    a = ap.parse_args()
+    a.dst = os.path.normpath(a.dst)  # "DST/" would put DST.partial inside DST.
+    if os.path.exists(a.dst):
+        sys.exit(f"{a.dst} exists: give a new folder")
+    cams = [c for c in ("image_0", "image_1") if os.path.isdir(os.path.join(a.src, c))]
+    if "image_0" not in cams:
+        sys.exit(f"{a.src} has no image_0/: give a KITTI sequence folder")
+    for name in ("calib.txt", "poses.txt", "times.txt"):
+        if not os.path.isfile(os.path.join(a.src, name)):
+            sys.exit(f"{a.src} has no {name}: give a KITTI sequence folder with ground truth")
+    names = sorted(n for n in os.listdir(os.path.join(a.src, "image_0")) if n.endswith(".png"))
+    with open(os.path.join(a.src, "poses.txt")) as f:
+        poses = [line.strip() for line in f if line.strip()]
+    with open(os.path.join(a.src, "times.txt")) as f:
+        times = [line.strip() for line in f if line.strip()]
+    if not (len(names) == len(poses) == len(times)):
+        sys.exit(f"{a.src}: {len(names)} images, {len(poses)} poses, {len(times)} times")
+    if a.kind == "drop" and len(names) < 10:
+        sys.exit(f"--kind drop needs 10 frames or more, not {len(names)}")
+    rng = np.random.default_rng(a.seed)
+    order = frame_order(a.kind, len(names), rng)
+
+    tmp = a.dst + ".partial"
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        write(a, tmp, cams, names, poses, times, order, rng)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)  # No half-written folder is left behind.
+        raise
     os.rename(tmp, a.dst)
     print(f"{a.dst}: {len(order)} frames of {a.src}, {a.kind} (seed {a.seed})")
 

@@ -4,8 +4,10 @@
 // one (this file draws its own noise with std::mt19937, so the pixels differ from the script's):
 //  - every image is multiplied by exp(N(0, 0.3^2)), drawn per camera and frame (cameras that
 //    expose on their own: the stereo and temporal matches compare patches of other brightness);
-//  - at frame 25 the car stands still for 15 frames: that image pair repeated, each copy with
-//    fresh N(0, 2^2) sensor noise, the times renumbered at 10 Hz.
+//  - at frame 25 the car stands still for 15 frames: that image pair repeated, the times
+//    renumbered at 10 Hz; every image gets fresh N(0, 2^2) sensor noise, so the copies differ.
+// std::normal_distribution's draws depend on the standard library (libstdc++ here), so another
+// one makes other images and another measured ATE, well within the 1.5x bounds.
 // Measured values: docs/results.md, "stop 59".
 #include <gtest/gtest.h>
 
@@ -46,7 +48,11 @@ std::string StressedKitti(const std::filesystem::path& dst) {
   for (std::string line; std::getline(poses_in, line);) {
     if (!line.empty()) poses.push_back(line);
   }
-  EXPECT_EQ(poses.size(), 51u);
+  if (poses.size() != 51u) {
+    ADD_FAILURE() << src / "poses.txt"
+                  << " has " << poses.size() << " poses, not 51";
+    return dst.string();
+  }
   std::mt19937 rng(59);
   std::normal_distribution<double> log_gain(0.0, 0.3);
   std::ofstream poses_out(dst / "poses.txt"), times_out(dst / "times.txt");
@@ -146,6 +152,7 @@ TEST(KittiExposureE2e, ExposurePerCameraAndAStopKeepEveryFrameAndTheStopStill) {
   DALA_SKIP_WITHOUT_SHARED_DATA("kitti06_0000-0050");
   const testing::TempDir tmp;
   const std::string data = StressedKitti(std::filesystem::path(tmp.path()) / "data");
+  if (HasFailure()) return;  // No complete folder to run on.
   ExpectHolds(RunStressed(data, tmp.path() + "/stereo", "stereo"),
               "ba/stereo KITTI 06 0-50, exposure per camera and frame, a 15-frame stop", 0.0198);
   ExpectHolds(RunStressed(data, tmp.path() + "/mono", "mono"),
