@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "tests/test_util.h"
@@ -28,6 +30,18 @@ inline DalaCliResult RunDala(const std::string& args, const std::string& log_pre
   const std::string cmd = std::string(DALA_BINARY) + " " + args + " > " + out + " 2> " + err;
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadAll(out), ReadAll(err)};
+}
+
+// Runs `dala ARGS` whose results go into the folder OUT (`run DATA ... --out OUT`; its logs are
+// OUT.out and OUT.err) and returns OUT/report.json parsed. A non-zero exit or a missing or
+// unreadable report is a test failure; the result is then null or discarded (is_discarded()).
+inline nlohmann::json RunDalaForReport(const std::string& args, const std::string& out) {
+  const DalaCliResult r = RunDala(args, out);
+  EXPECT_EQ(r.status, 0) << r.log();
+  std::ifstream in(out + "/report.json");
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  EXPECT_FALSE(report.is_discarded()) << "no readable report.json in " << out;
+  return report;
 }
 
 }  // namespace dala::testing

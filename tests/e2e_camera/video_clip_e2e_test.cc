@@ -20,13 +20,10 @@ namespace {
 nlohmann::json DalaRun(const std::string& input, const std::string& extra,
                        const std::string& out) {
   std::filesystem::remove_all(out);
-  const testing::DalaCliResult r =
-      testing::RunDala("run " + input + " --config " + DALA_SOURCE_DIR +
-                           "/configs/kitti.yaml --progress=false --out " + out + " " + extra,
-                       out);
-  EXPECT_EQ(r.status, 0) << r.log();
-  std::ifstream in(out + "/report.json");
-  return nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  return testing::RunDalaForReport("run " + input + " --config " + DALA_SOURCE_DIR +
+                                       "/configs/kitti.yaml --progress=false --out " + out + " " +
+                                       extra,
+                                   out);
 }
 
 TEST(VideoClipE2e, KittiClipAsVideoWithinOnePointThreeTimesThePngAte) {

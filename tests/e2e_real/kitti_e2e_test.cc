@@ -45,13 +45,10 @@ namespace {
 nlohmann::json RunKitti(const std::string& extra, const std::string& out) {
   std::filesystem::remove_all(out);
   // (configs/kitti.yaml changes nothing in the EKF runs.)
-  const testing::DalaCliResult r = testing::RunDala(
+  return testing::RunDalaForReport(
       "run " + testing::SharedDataDir() + "/kitti06_0000-0050 --config " + DALA_SOURCE_DIR +
           "/configs/kitti.yaml --progress=false --out " + out + " " + extra,
       out);
-  EXPECT_EQ(r.status, 0) << r.log();
-  std::ifstream in(out + "/report.json");
-  return nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
 }
 
 TEST(KittiStereoE2e, AteWithinOnePointFiveTimesTheDocumentedValue) {
@@ -200,13 +197,10 @@ TEST(KittiMonoE2e, FastForwardMotionStartsWithinTwoFrames) {
     const std::string data = EveryThirdFrame(offset);
     const std::string out = data + "_out";
     std::filesystem::remove_all(out);
-    const testing::DalaCliResult r =
-        testing::RunDala("run " + data + " --mode mono --progress=false --set ransac_order_seed=" +
-                             std::to_string(draw) + " --out " + out,
-                         out);
-    ASSERT_EQ(r.status, 0) << r.log();
-    std::ifstream in(out + "/report.json");
-    const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+    const nlohmann::json report = testing::RunDalaForReport(
+        "run " + data + " --mode mono --progress=false --set ransac_order_seed=" +
+            std::to_string(draw) + " --out " + out,
+        out);
     ASSERT_FALSE(report.is_discarded()) << "no report.json in " << out;
     int first_pose = -1, lost_after = 0;
     for (const nlohmann::json& f : report["frames"]) {

@@ -92,13 +92,9 @@ struct StressedRun {
 };
 
 StressedRun RunStressed(const std::string& data, const std::string& out, const std::string& mode) {
-  const testing::DalaCliResult r =
-      testing::RunDala("run " + data + " --mode " + mode + " --progress=false --out " + out, out);
-  EXPECT_EQ(r.status, 0) << r.log();
+  const nlohmann::json report = testing::RunDalaForReport(
+      "run " + data + " --mode " + mode + " --progress=false --out " + out, out);
   StressedRun run;
-  std::ifstream in(out + "/report.json");
-  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
-  EXPECT_FALSE(report.is_discarded()) << "no report.json in " << out;
   if (!report.is_discarded()) run.summary = report["summary"];
   if (std::filesystem::exists(out + "/trajectory.txt")) {
     run.trajectory = ReadTrajectory(out + "/trajectory.txt", TrajectoryFormat::kTum);

@@ -101,13 +101,9 @@ std::string YawedKitti(const std::filesystem::path& dst, double amplitude_deg, i
 
 // dala run --mode mono on `data` with `extra` options, into `out`: report.json's summary.
 nlohmann::json RunMono(const std::string& data, const std::string& out, const std::string& extra) {
-  const testing::DalaCliResult r =
-      testing::RunDala("run " + data + " --mode mono --progress=false --out " + out + extra, out);
-  EXPECT_EQ(r.status, 0) << r.log();
-  std::ifstream in(out + "/report.json");
-  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
-  EXPECT_FALSE(report.is_discarded()) << "no report.json in " << out;
-  return report.is_discarded() ? nlohmann::json() : report["summary"];
+  const nlohmann::json report = testing::RunDalaForReport(
+      "run " + data + " --mode mono --progress=false --out " + out + extra, out);
+  return report.is_discarded() || report.is_null() ? nlohmann::json() : report["summary"];
 }
 
 // A = 4 deg, P = 8 frames (up to 2.8 deg per frame), from frame 0, without the initialisation's
