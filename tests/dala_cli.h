@@ -34,7 +34,7 @@ inline DalaCliResult RunDala(const std::string& args, const std::string& log_pre
 
 // Runs `dala ARGS` whose results go into the folder OUT (`run DATA ... --out OUT`; its logs are
 // OUT.out and OUT.err) and returns OUT/report.json parsed. A non-zero exit or a missing or
-// unreadable report is a test failure; the result is then null or discarded (is_discarded()).
+// unreadable report is a test failure; the result is then discarded (is_discarded()).
 inline nlohmann::json RunDalaForReport(const std::string& args, const std::string& out) {
   const DalaCliResult r = RunDala(args, out);
   EXPECT_EQ(r.status, 0) << r.log();

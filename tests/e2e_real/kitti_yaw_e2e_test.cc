@@ -103,7 +103,7 @@ std::string YawedKitti(const std::filesystem::path& dst, double amplitude_deg, i
 nlohmann::json RunMono(const std::string& data, const std::string& out, const std::string& extra) {
   const nlohmann::json report = testing::RunDalaForReport(
       "run " + data + " --mode mono --progress=false --out " + out + extra, out);
-  return report.is_discarded() || report.is_null() ? nlohmann::json() : report["summary"];
+  return report.is_discarded() ? nlohmann::json() : report["summary"];
 }
 
 // A = 4 deg, P = 8 frames (up to 2.8 deg per frame), from frame 0, without the initialisation's
