@@ -7,13 +7,13 @@
 //   StereoEkfEstimator (backend/ekf):     the paper's stereo EKF-SLAM.
 //   MonoEkfEstimator (backend/ekf):       the paper's bearing-only EKF-SLAM (Gaussian-sum init).
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/frame_measurement.h"
 #include "core/geometry.h"
@@ -95,8 +95,10 @@ class Estimator {
   // After the last frame of an offline run: re-estimates the whole trajectory and map at once
   // (the BA estimator: a global bundle adjustment over every keyframe, backend/ba/global_ba.h),
   // so trajectory() and map() give the refined estimates. Frames may still be added after it.
+  // stop_requested (may be empty) is polled while it works: once it returns true the refinement
+  // ends and nothing changes (done = false, the report says so).
   // Default: an estimator that cannot (the EKFs: a filter has no past to revisit).
-  virtual RefinementSummary Refine() {
+  virtual RefinementSummary Refine(const std::function<bool()>& /*stop_requested*/) {
     RefinementSummary s;
     s.report = "no global refinement for the " + name() + "/" + mode() + " estimator";
     return s;

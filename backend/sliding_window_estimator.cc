@@ -1071,7 +1071,7 @@ void SlidingWindowEstimator::RefineFrame(const WaitingFrame& waiting) {
   if (r.status == PoseOnlyStatus::kOk) f.T_kf_c = T_w_kf.inverse() * r.T_w_c;
 }
 
-RefinementSummary SlidingWindowEstimator::Refine() {
+RefinementSummary SlidingWindowEstimator::Refine(const std::function<bool()>& stop_requested) {
   WaitForWindowSolve();
   // One camera: a pair (the first map's, or a new map's after a loss) found at the last frame
   // had no next frame to check it; the map starts from it unchecked, so that its frames have
@@ -1136,18 +1136,18 @@ RefinementSummary SlidingWindowEstimator::Refine() {
     GlobalBaOptions offset_ba = global_ba;
     offset_ba.estimate_disparity_offset = true;
     offset_ba.triangulate_unmapped = false;
-    const GlobalBaSummary so = SolveGlobalBa(K, offset_ba, &for_offset);
+    const GlobalBaSummary so = SolveGlobalBa(K, offset_ba, &for_offset, stop_requested);
     offset_time_s = so.time_s;
     if (!so.usable) {
       out.report = so.BriefReport();
       out.time_s = so.time_s;
-      LOG(WARNING) << out.report << ": the run's estimates are kept";
+      if (!so.stopped) LOG(WARNING) << out.report << ": the run's estimates are kept";
       return out;
     }
     K.disparity_offset_px = so.disparity_offset_px;
   }
   global_ba.estimate_disparity_offset = false;
-  const GlobalBaSummary s = SolveGlobalBa(K, global_ba, &problem);
+  const GlobalBaSummary s = SolveGlobalBa(K, global_ba, &problem, stop_requested);
   out.report = s.BriefReport();
   out.keyframes = s.num_keyframes;
   out.landmarks = s.num_landmarks;
@@ -1157,7 +1157,7 @@ RefinementSummary SlidingWindowEstimator::Refine() {
   out.final_cost = s.final_cost;
   out.time_s = offset_time_s + s.time_s;
   if (!s.usable) {
-    LOG(WARNING) << out.report << ": the run's estimates are kept";
+    if (!s.stopped) LOG(WARNING) << out.report << ": the run's estimates are kept";
     return out;
   }
   out.done = true;

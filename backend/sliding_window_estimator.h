@@ -257,7 +257,7 @@ class SlidingWindowEstimator : public Estimator {
   std::vector<MapPoint> map() const override;
   bool UseMap(const std::vector<MapPoint>& landmarks) override;
   // The global BA (see the class comment, "Refinement").
-  RefinementSummary Refine() override;
+  RefinementSummary Refine(const std::function<bool()>& stop_requested) override;
   std::string DisparityOffsetNote() const override;
   std::optional<double> DisparityOffsetPx() const override;
 

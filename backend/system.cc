@@ -249,7 +249,9 @@ std::vector<SavedKeyframe> System::keyframes() const {
   return out;
 }
 
-RefinementSummary System::Finish() { return estimator_->Refine(); }
+RefinementSummary System::Finish(const std::function<bool()>& stop_requested) {
+  return estimator_->Refine(stop_requested);
+}
 
 std::string System::ScaleDescription() const {
   if (options_.mode == "stereo") return "metric (stereo)";

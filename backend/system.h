@@ -14,6 +14,7 @@
 //
 // The world frame is the first frame's left camera. Not thread-safe; deterministic.
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -102,8 +103,9 @@ class System {
   // rig whose disparity offset was calibrated online); trajectory(), map() and the saved map
   // then give the refined estimates.
   // Otherwise nothing changes (done = false, `report` says why). Frames may still be tracked
-  // after it.
-  RefinementSummary Finish();
+  // after it. stop_requested (may be empty; `dala run` passes its Ctrl-C) is polled while the
+  // refinement works: once it returns true, the refinement ends and the online estimates stay.
+  RefinementSummary Finish(const std::function<bool()>& stop_requested = nullptr);
 
   // Every frame tracked so far that has a pose (estimates corrected by later optimisation);
   // a mono run leaves out the frames before its initialisation (stats() says which).

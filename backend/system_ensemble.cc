@@ -88,9 +88,9 @@ void SystemEnsemble::UseMap(const SavedMap& map) {
   for (auto& draw : draws_) draw->UseMap(map);
 }
 
-std::vector<RefinementSummary> SystemEnsemble::Finish() {
+std::vector<RefinementSummary> SystemEnsemble::Finish(const std::function<bool()>& stop_requested) {
   std::vector<RefinementSummary> summaries(draws_.size());
-  ForEachDraw([&](int k) { summaries[k] = draws_[k]->Finish(); });
+  ForEachDraw([&](int k) { summaries[k] = draws_[k]->Finish(stop_requested); });
   return summaries;
 }
 

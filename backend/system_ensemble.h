@@ -36,6 +36,7 @@
 // order, an image that does not suit the rig) leave every draw as it was; after any other
 // exception the draws may be out of step, and the ensemble should be discarded.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -69,7 +70,7 @@ class SystemEnsemble {
   // Every draw starts in the saved map (System::UseMap).
   void UseMap(const SavedMap& map);
   // The global refinement of every draw (System::Finish), one summary per draw.
-  std::vector<RefinementSummary> Finish();
+  std::vector<RefinementSummary> Finish(const std::function<bool()>& stop_requested = nullptr);
 
   int size() const { return static_cast<int>(draws_.size()); }
   const System& draw(int k) const { return *draws_.at(k); }

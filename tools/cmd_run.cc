@@ -226,6 +226,7 @@ DatasetOptions DatasetOptionsFromFlags(const SystemOptions& options) {
 struct FramesRun {
   size_t done = 0;
   int signal = 0;  // The stop signal received (0: none, the run reached the end).
+  bool in_refinement = false;  // It came during the global refinement, after the last frame.
   double wall_s = 0.0;
   std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
 };
@@ -281,15 +282,27 @@ FramesRun TrackEveryFrame(Dataset* dataset, SystemEnsemble* runs, const StopSign
 }
 
 // The global refinement of the whole run, every draw (the BA estimator's global bundle
-// adjustment, ba.final_ba); not after an interruption: the user asked to stop.
-std::vector<RefinementSummary> Refine(SystemEnsemble* runs, const FramesRun& run,
-                                      const SystemOptions& options) {
-  if (run.signal != 0) {
+// adjustment, ba.final_ba); not after an interruption: the user asked to stop. A stop signal
+// during it ends it (the online trajectory is kept) and counts as an interruption (run->signal).
+std::vector<RefinementSummary> Refine(SystemEnsemble* runs, FramesRun* run,
+                                      const SystemOptions& options, const StopSignal& stop) {
+  if (run->signal != 0) {
     RefinementSummary refinement;
     refinement.report = "not run: the run was interrupted";
     return std::vector<RefinementSummary>(runs->size(), refinement);
   }
-  const std::vector<RefinementSummary> refinements = runs->Finish();
+  // The global BA can take minutes on a long run (docs/backend.md): say so before it starts.
+  const std::optional<double> offset_px = runs->first().estimator().DisparityOffsetPx();
+  const std::string& final_ba = options.ba.final_ba;
+  if (options.estimator == "ba" && (final_ba == "always" || final_ba == "after_loop" ||
+                                    (final_ba == "rig_offset" && offset_px && *offset_px != 0.0))) {
+    std::cerr << "[run] global BA after the run (ba.final_ba=" << final_ba
+              << "): Ctrl-C stops it and keeps the online trajectory\n";
+  }
+  std::vector<RefinementSummary> refinements =
+      runs->Finish([&stop] { return stop.received() != 0; });
+  run->signal = stop.received();
+  run->in_refinement = run->signal != 0;
   if (options.estimator == "ba") {
     for (int k = 0; k < runs->size(); ++k) {
       std::cerr << "[run] ";
@@ -849,10 +862,10 @@ int RunRun(const std::vector<std::string>& args) {
   // --video: what the frontend saw, frame by frame.
   std::optional<report::FrameVideo> video;
   if (!FLAGS_video.empty()) video.emplace(FLAGS_video);
-  const FramesRun run = TrackEveryFrame(dataset.get(), &runs, stop, video ? &*video : nullptr);
+  FramesRun run = TrackEveryFrame(dataset.get(), &runs, stop, video ? &*video : nullptr);
   // The causal (online) trajectories, then the global refinement of the whole run.
   const std::vector<Trajectory> online_runs = runs.Trajectories();
-  const std::vector<RefinementSummary> refinements = Refine(&runs, run, options);
+  const std::vector<RefinementSummary> refinements = Refine(&runs, &run, options, stop);
   const std::vector<Trajectory> final_runs = runs.Trajectories();
   const DrawsResult draws =
       FuseDraws(runs, final_runs, online_runs,
@@ -939,6 +952,12 @@ int RunRun(const std::vector<std::string>& args) {
   }
   std::cout << "report      " << dir << "/report.html (3D view, charts; written in " << std::fixed
             << std::setprecision(0) << report_ms << " ms)\n";
+  if (run.in_refinement) {
+    std::cerr << "[run] interrupted by " << StopSignalName(run.signal) << " during the global BA: "
+              << "trajectory.txt is the online trajectory of the " << run.done << " frames "
+              << "(report.json: summary.interrupted)\n";
+    return 128 + run.signal;
+  }
   if (run.signal != 0) {
     std::cerr << "[run] interrupted by " << StopSignalName(run.signal) << ": the results cover the "
               << run.done << " frames done of " << dataset->size() << " (report.json: "
@@ -980,7 +999,9 @@ const CommandRegistrar kRegistrar(
      "A frame whose image is missing, unreadable or of the wrong size is skipped with a warning\n"
      "and reported lost, without a pose (--strict: exit 2 instead); the first frame must be\n"
      "readable. Ctrl-C (SIGINT) or SIGTERM stops after the current frame: the results of the\n"
-     "frames done are written as usual, report.json says interrupted, exit status 128 + signal.\n\n"
+     "frames done are written as usual, report.json says interrupted, exit status 128 + signal;\n"
+     "during the global BA after the last frame it stops that, and trajectory.txt is the online\n"
+     "trajectory.\n\n"
      "--map FILE starts in the map.dmap of an earlier run (same camera and options; a stereo run\n"
      "needs a stereo map): each frame is relocalised against the map's keyframes until one is\n"
      "placed (frames before have no pose), then the run continues in the map's frame and unit;\n"

@@ -1,14 +1,17 @@
 #include "backend/ba/global_ba.h"
 
+#include <ceres/iteration_callback.h>
 #include <ceres/problem.h>
 #include <ceres/sized_cost_function.h>
 #include <ceres/solver.h>
 #include <glog/logging.h>
 
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "backend/ba/pose_block.h"
 #include "backend/ba/reprojection_factors.h"
@@ -40,11 +43,26 @@ std::string GlobalBaSummary::BriefReport() const {
      << num_triangulated << " triangulated here), " << num_observations << " observations, "
      << num_outliers_removed << " outliers removed, " << num_solves << " solves / "
      << num_iterations << " iterations, cost " << initial_cost << " -> " << final_cost
-     << ", disparity offset " << disparity_offset_px << " px" << (usable ? "" : " (NOT usable)");
+     << ", disparity offset " << disparity_offset_px << " px"
+     << (stopped  ? " (stopped on request: nothing changed)"
+         : usable ? ""
+                  : " (NOT usable)");
   return os.str();
 }
 
 namespace {
+
+// Ends a solve (SOLVER_ABORT: the solution is then not usable) once the caller asks to stop.
+class StopCallback : public ceres::IterationCallback {
+ public:
+  explicit StopCallback(std::function<bool()> stop) : stop_(std::move(stop)) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return stop_() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  std::function<bool()> stop_;
+};
 
 // r = (|t_b - t_a| - d) / sigma on two pose blocks x = [q; t] (backend/ba/pose_block.h):
 // dr/dt_b = u^T / sigma, dr/dt_a = -u^T / sigma with u the unit vector from a to b; the
@@ -112,7 +130,8 @@ std::map<LandmarkId, Eigen::Vector3d> TriangulateUnmapped(const StereoIntrinsics
 }  // namespace
 
 GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K_in, const GlobalBaOptions& options,
-                              GlobalBaProblem* problem) {
+                              GlobalBaProblem* problem,
+                              const std::function<bool()>& stop_requested) {
   // K's disparity offset follows the estimate (Options::estimate_disparity_offset) from one
   // solve to the next, so that the outlier test judges each residual under it.
   StereoIntrinsics K = K_in;
@@ -144,7 +163,14 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K_in, const GlobalBaOption
   std::set<LandmarkId> last_used_landmarks;  // In the last solve.
   auto manifold = MakePoseManifold();
   auto loss = MakeLoss(options.loss, options.loss_scale);
+  const auto stop = [&] { return stop_requested && stop_requested(); };
+  StopCallback stop_callback(stop);
   for (int round = 0;; ++round) {
+    if (stop()) {
+      summary.stopped = true;
+      summary.usable = false;
+      break;
+    }
     // A landmark enters when two keyframes observe it (one view constrains nothing).
     std::map<LandmarkId, int> views;
     for (const auto& o : observations) {
@@ -199,6 +225,7 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K_in, const GlobalBaOption
     solver_options.function_tolerance = options.function_tolerance;
     solver_options.num_threads = options.num_threads;
     solver_options.logging_type = ceres::SILENT;
+    solver_options.callbacks.push_back(&stop_callback);
     ceres::Solver::Summary ceres_summary;
     ceres::Solve(solver_options, &ceres_problem, &ceres_summary);
     VLOG(2) << ceres_summary.BriefReport();
@@ -207,6 +234,10 @@ GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K_in, const GlobalBaOption
     if (round == 0) summary.initial_cost = ceres_summary.initial_cost;
     summary.final_cost = ceres_summary.final_cost;
     summary.usable = ceres_summary.IsSolutionUsable();
+    if (stop()) {
+      summary.stopped = true;
+      summary.usable = false;
+    }
     if (!summary.usable) break;
     K.disparity_offset_px = offset;
 

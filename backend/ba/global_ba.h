@@ -19,15 +19,18 @@
 // fewer than two observations leaves the problem (its position is not changed).
 //
 // Deterministic (ordered containers, one thread by default). Cost: SPARSE_SCHUR with SuiteSparse,
-// the landmarks eliminated; a 1,000-keyframe run solves in seconds (docs/backend.md).
+// the landmarks eliminated; it grows with the observations: KITTI 06 0-50 in stereo (51
+// keyframes) about 1 s, a rendered 600-frame street drive (569 keyframes, 423,000 observations)
+// 90 s on 2 cores (docs/backend.md, "Global BA after the run"). A caller's stop request, polled
+// at every iteration, ends it with nothing changed.
 
+#include <Eigen/Core>
+#include <functional>
 #include <map>
 #include <set>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "backend/ba/ba_loss.h"
 #include "backend/ba/ba_types.h"
@@ -96,6 +99,7 @@ struct GlobalBaSummary {
   double disparity_offset_px = 0.0;
   double time_s = 0.0;
   bool usable = false;  // The last solve's IsSolutionUsable (false: nothing was changed).
+  bool stopped = false;  // The caller's stop request ended it (usable is then false).
 
   // One line without the time (report.json keeps it apart: the rest is deterministic).
   std::string BriefReport() const;
@@ -103,8 +107,11 @@ struct GlobalBaSummary {
 
 // Refines problem->keyframes and problem->landmarks in place (see the file comment). With no
 // residual (fewer than two keyframes sharing a landmark), nothing changes and usable is true.
+// stop_requested (may be empty) is polled before each solve and at every solver iteration: once
+// it returns true the refinement ends with nothing changed (stopped, not usable).
 GlobalBaSummary SolveGlobalBa(const StereoIntrinsics& K, const GlobalBaOptions& options,
-                              GlobalBaProblem* problem);
+                              GlobalBaProblem* problem,
+                              const std::function<bool()>& stop_requested = nullptr);
 
 }  // namespace dala
 

@@ -230,5 +230,36 @@ TEST(RunInterrupted, BySignalWritesTheFramesDone) {
   }
 }
 
+// SIGINT during the global BA after the last frame (ba.final_ba=always; ~7 s here): it stops, the
+// online trajectory is written as trajectory.txt with every output, the run says so and exits
+// 130. The trajectory is, byte for byte, the one a run without the global BA writes.
+TEST(RunInterrupted, DuringTheGlobalBaKeepsTheOnlineTrajectory) {
+  testing::TempDir dir;
+  const std::string seq = RenderedFolder(dir, 200, 480, 320);
+  const std::string out = dir / "stopped";
+  Child child(
+      {DALA_BINARY, "run", seq, "--out", out, "--progress=false", "--set", "ba.final_ba=always"});
+  ASSERT_TRUE(child.started());
+  ASSERT_TRUE(child.WaitForLine("Ctrl-C stops it")) << child.log();
+  child.Signal(SIGINT);
+  EXPECT_EQ(child.Wait(), 128 + SIGINT) << child.log();
+  EXPECT_THAT(child.log(), HasSubstr("stopped on request: nothing changed"));
+  EXPECT_THAT(child.log(), HasSubstr("interrupted by SIGINT during the global BA"));
+  EXPECT_THAT(child.log(), Not(HasSubstr("NOT usable")));
+  const nlohmann::json report = nlohmann::json::parse(ReadAll(out + "/report.json"));
+  const nlohmann::json& summary = report.at("summary");
+  EXPECT_TRUE(summary.at("interrupted").get<bool>());
+  EXPECT_FALSE(summary.at("refinement").at("done").get<bool>());
+  EXPECT_EQ(summary.at("frames").get<int>(), 200);
+  EXPECT_EQ(summary.at("frames_with_pose").get<int>(), 200);
+  EXPECT_FALSE(fs::exists(out + "/trajectory_online.txt"));
+  for (const auto& entry : fs::directory_iterator(out)) {
+    EXPECT_THAT(entry.path().filename().string(), Not(HasSubstr(".tmp"))) << "left over";
+  }
+  const auto online = DalaRun(seq + " --out " + (dir / "online") + " --set ba.final_ba=off", dir);
+  ASSERT_EQ(online.status, 0) << online.err;
+  EXPECT_EQ(ReadAll(out + "/trajectory.txt"), ReadAll(dir / "online/trajectory.txt"));
+}
+
 }  // namespace
 }  // namespace dala

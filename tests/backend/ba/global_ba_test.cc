@@ -1,5 +1,6 @@
 #include "backend/ba/global_ba.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -176,6 +177,35 @@ TEST(GlobalBaTest, NothingToSolveChangesNothing) {
   EXPECT_TRUE(s.usable);
   EXPECT_EQ(s.num_solves, 0);
   for (const auto& [id, T] : keyframes) EXPECT_TRUE(problem.keyframes.at(id).isApprox(T, 0.0));
+}
+
+// A stop request ends the refinement wherever it is (before the first solve, or between two
+// iterations of one) and changes nothing: the run's own estimates stay, as after a failed solve.
+TEST(GlobalBaTest, AStopRequestEndsItAndChangesNothing) {
+  const BaScene scene = MakeBaScene(Scene(/*stereo=*/true));
+  for (const int polls_before_stop : {0, 3}) {
+    GlobalBaProblem problem = DriftedProblem(scene, 1, 0.1, 9);
+    const GlobalBaProblem before = problem;
+    int polls = 0;
+    const GlobalBaSummary s = SolveGlobalBa(scene.K, GlobalBaOptions(), &problem,
+                                            [&] { return polls++ >= polls_before_stop; });
+    EXPECT_TRUE(s.stopped) << polls_before_stop;
+    EXPECT_FALSE(s.usable);
+    EXPECT_EQ(s.num_solves, polls_before_stop == 0 ? 0 : 1) << s.BriefReport();
+    EXPECT_THAT(s.BriefReport(), ::testing::HasSubstr("stopped on request"));
+    for (const auto& [id, T] : before.keyframes) {
+      EXPECT_EQ(problem.keyframes.at(id).matrix(), T.matrix()) << id;
+    }
+    EXPECT_EQ(problem.landmarks, before.landmarks);
+  }
+  // A request that never comes changes nothing either: the same solution as without one.
+  GlobalBaProblem with = DriftedProblem(scene, 1, 0.1, 9), without = with;
+  SolveGlobalBa(scene.K, GlobalBaOptions(), &with, [] { return false; });
+  const GlobalBaSummary s = SolveGlobalBa(scene.K, GlobalBaOptions(), &without);
+  EXPECT_FALSE(s.stopped);
+  for (const auto& [id, T] : with.keyframes) {
+    EXPECT_EQ(T.matrix(), without.keyframes.at(id).matrix()) << id;
+  }
 }
 
 TEST(GlobalBaTest, IsDeterministic) {
