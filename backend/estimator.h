@@ -62,7 +62,8 @@ struct EstimatorOutput {
 
 // What Estimator::Refine did.
 struct RefinementSummary {
-  bool done = false;   // false: nothing changed (`report` says why).
+  bool done = false;     // false: nothing changed (`report` says why).
+  bool stopped = false;  // The caller's stop request ended it (done is then false).
   std::string report;  // One line for the log.
   int keyframes = 0;
   int landmarks = 0;
@@ -95,8 +96,9 @@ class Estimator {
   // After the last frame of an offline run: re-estimates the whole trajectory and map at once
   // (the BA estimator: a global bundle adjustment over every keyframe, backend/ba/global_ba.h),
   // so trajectory() and map() give the refined estimates. Frames may still be added after it.
-  // stop_requested (may be empty) is polled while it works: once it returns true the refinement
-  // ends and nothing changes (done = false, the report says so).
+  // stop_requested (may be empty) is polled while it works (from the calling thread; with
+  // several Systems refined at once, from each of theirs): once it returns true the refinement
+  // ends and nothing changes (done = false, stopped = true, the report says so).
   // Default: an estimator that cannot (the EKFs: a filter has no past to revisit).
   virtual RefinementSummary Refine(const std::function<bool()>& /*stop_requested*/) {
     RefinementSummary s;

@@ -1141,6 +1141,7 @@ RefinementSummary SlidingWindowEstimator::Refine(const std::function<bool()>& st
     if (!so.usable) {
       out.report = so.BriefReport();
       out.time_s = so.time_s;
+      out.stopped = so.stopped;
       if (!so.stopped) LOG(WARNING) << out.report << ": the run's estimates are kept";
       return out;
     }
@@ -1156,6 +1157,7 @@ RefinementSummary SlidingWindowEstimator::Refine(const std::function<bool()>& st
   out.initial_cost = s.initial_cost;
   out.final_cost = s.final_cost;
   out.time_s = offset_time_s + s.time_s;
+  out.stopped = s.stopped;
   if (!s.usable) {
     if (!s.stopped) LOG(WARNING) << out.report << ": the run's estimates are kept";
     return out;

@@ -9,7 +9,10 @@
 // the left window centred at (u_l, v_l) and right windows centred at (u_r + k, v_l), k in
 // {-1, 0, +1} (bilinear sampling), and taking the vertex of the parabola through the three SSDs.
 // Using the left point's own row keeps the pair on one epipolar line, so the disparity is
-// measured at the left point's sub-pixel position (the one the estimators use).
+// measured at the left point's sub-pixel position (the one the estimators use). A real rig's
+// rows disagree a little (KITTI 06: -0.5 to +0.2 px across the image, scripts/stereo_rows.py);
+// refining in 2D there (the 3 x 3 SSD grid's quadratic) changed no median KITTI result beyond
+// a start's spread (docs/results.md, "stop 60").
 //
 // Depth limit (close and far points, as ORB-SLAM2's ThDepth): a systematic disparity error
 // delta (calibration and rectification residuals, typically 0.1-0.3 px on real rigs) biases the

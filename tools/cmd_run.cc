@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
@@ -283,7 +284,8 @@ FramesRun TrackEveryFrame(Dataset* dataset, SystemEnsemble* runs, const StopSign
 
 // The global refinement of the whole run, every draw (the BA estimator's global bundle
 // adjustment, ba.final_ba); not after an interruption: the user asked to stop. A stop signal
-// during it ends it (the online trajectory is kept) and counts as an interruption (run->signal).
+// during it ends it (the estimates stay as without it) and counts as an interruption
+// (run->signal, run->in_refinement).
 std::vector<RefinementSummary> Refine(SystemEnsemble* runs, FramesRun* run,
                                       const SystemOptions& options, const StopSignal& stop) {
   if (run->signal != 0) {
@@ -291,18 +293,19 @@ std::vector<RefinementSummary> Refine(SystemEnsemble* runs, FramesRun* run,
     refinement.report = "not run: the run was interrupted";
     return std::vector<RefinementSummary>(runs->size(), refinement);
   }
-  // The global BA can take minutes on a long run (docs/backend.md): say so before it starts.
-  const std::optional<double> offset_px = runs->first().estimator().DisparityOffsetPx();
-  const std::string& final_ba = options.ba.final_ba;
-  if (options.estimator == "ba" && (final_ba == "always" || final_ba == "after_loop" ||
-                                    (final_ba == "rig_offset" && offset_px && *offset_px != 0.0))) {
-    std::cerr << "[run] global BA after the run (ba.final_ba=" << final_ba
-              << "): Ctrl-C stops it and keeps the online trajectory\n";
-  }
-  std::vector<RefinementSummary> refinements =
-      runs->Finish([&stop] { return stop.received() != 0; });
+  // The global BA can take minutes on a long run (docs/backend.md): it is announced when it
+  // starts, which is when it first polls the stop request (before its first solve).
+  std::once_flag announced;
+  std::vector<RefinementSummary> refinements = runs->Finish([&stop, &announced] {
+    std::call_once(announced, [] {
+      std::cerr << "[run] global BA after the last frame: Ctrl-C stops it and keeps the "
+                   "trajectory without it\n";
+    });
+    return stop.received() != 0;
+  });
   run->signal = stop.received();
-  run->in_refinement = run->signal != 0;
+  run->in_refinement = std::any_of(refinements.begin(), refinements.end(),
+                                   [](const RefinementSummary& r) { return r.stopped; });
   if (options.estimator == "ba") {
     for (int k = 0; k < runs->size(); ++k) {
       std::cerr << "[run] ";
@@ -493,14 +496,17 @@ nlohmann::json Summary(const System& system, const FrameCounts& c, const FramesR
   return {
       {"frames", frames},
       {"fps", frames / std::max(run.wall_s, 1e-9)},
-      {"ms_mean", total_ms.empty() ? 0.0 : std::accumulate(total_ms.begin(), total_ms.end(), 0.0) / total_ms.size()},
+      {"ms_mean", total_ms.empty()
+                      ? 0.0
+                      : std::accumulate(total_ms.begin(), total_ms.end(), 0.0) / total_ms.size()},
       {"ms_median", Percentile(total_ms, 0.5)},
       {"ms_p95", Percentile(total_ms, 0.95)},
       {"ms_max", total_ms.empty() ? 0.0 : *std::max_element(total_ms.begin(), total_ms.end())},
       {"stages_ms", StageTable(system.stats())},
       {"tracking_failures", c.failures},  // Including the skipped frames.
       {"frames_skipped", c.skipped},      // Unreadable images: no pose (note "skipped: ...").
-      // Stopped by SIGINT / SIGTERM before the end: the outputs cover the frames done.
+      // Stopped by SIGINT / SIGTERM before the end (the outputs cover the frames done) or
+      // during the global BA after it (refinement.report says "stopped on request").
       {"interrupted", run.signal != 0},
       {"frames_initialising", c.initialising},
       {"frames_with_pose", frames_with_pose},
@@ -953,9 +959,16 @@ int RunRun(const std::vector<std::string>& args) {
   std::cout << "report      " << dir << "/report.html (3D view, charts; written in " << std::fixed
             << std::setprecision(0) << report_ms << " ms)\n";
   if (run.in_refinement) {
+    // With --draws N the draws are refined side by side: one whose BA had finished keeps it.
+    const auto finished = std::count_if(refinements.begin(), refinements.end(),
+                                        [](const RefinementSummary& r) { return r.done; });
     std::cerr << "[run] interrupted by " << StopSignalName(run.signal) << " during the global BA: "
-              << "trajectory.txt is the online trajectory of the " << run.done << " frames "
-              << "(report.json: summary.interrupted)\n";
+              << "the results are those of ba.final_ba=off";
+    if (finished > 0) {
+      std::cerr << " but for the " << finished << " of " << refinements.size()
+                << " draws whose global BA had finished";
+    }
+    std::cerr << " (report.json: summary.interrupted)\n";
     return 128 + run.signal;
   }
   if (run.signal != 0) {
@@ -1000,8 +1013,8 @@ const CommandRegistrar kRegistrar(
      "and reported lost, without a pose (--strict: exit 2 instead); the first frame must be\n"
      "readable. Ctrl-C (SIGINT) or SIGTERM stops after the current frame: the results of the\n"
      "frames done are written as usual, report.json says interrupted, exit status 128 + signal;\n"
-     "during the global BA after the last frame it stops that, and trajectory.txt is the online\n"
-     "trajectory.\n\n"
+     "during the global BA after the last frame it stops that, and the results are those of\n"
+     "--set ba.final_ba=off.\n\n"
      "--map FILE starts in the map.dmap of an earlier run (same camera and options; a stereo run\n"
      "needs a stereo map): each frame is relocalised against the map's keyframes until one is\n"
      "placed (frames before have no pose), then the run continues in the map's frame and unit;\n"

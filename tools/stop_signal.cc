@@ -14,14 +14,15 @@ std::atomic<int> g_received{0};
 static_assert(std::atomic<int>::is_always_lock_free);
 
 // Async-signal-safe: an atomic flag and write(2) only.
+// The first signal wins (compare-exchange: two signals delivered to two threads at once cannot
+// both count as the first).
 extern "C" void OnStopSignal(int signal) {
-  if (g_received != 0) {
+  int none = 0;
+  if (!g_received.compare_exchange_strong(none, signal)) {
     static const char kBusy[] = "\n[stop] already stopping: the results are being written\n";
     const ssize_t ignored = write(STDERR_FILENO, kBusy, sizeof(kBusy) - 1);
     (void)ignored;
-    return;
   }
-  g_received = signal;
 }
 
 }  // namespace

@@ -44,7 +44,7 @@ std::string GlobalBaSummary::BriefReport() const {
      << num_outliers_removed << " outliers removed, " << num_solves << " solves / "
      << num_iterations << " iterations, cost " << initial_cost << " -> " << final_cost
      << ", disparity offset " << disparity_offset_px << " px"
-     << (stopped  ? " (stopped on request: nothing changed)"
+     << (stopped  ? " (stopped on request: poses and landmarks unchanged)"
          : usable ? ""
                   : " (NOT usable)");
   return os.str();
