@@ -674,6 +674,10 @@ void PrintSummary(const System& system, const FrameCounts& c, const nlohmann::js
   if (const std::string note = EstimatorLimitNote(system, options); !note.empty()) {
     out << "note        " << note << "\n";
   }
+  if (refinement.stopped) {
+    out << "note        the global BA after the last frame was stopped (Ctrl-C or SIGTERM): "
+           "these are the results of --set ba.final_ba=off\n";
+  }
   if (!FLAGS_map.empty()) {
     out << "saved map   " << FLAGS_map << ": "
         << (localised_at >= 0 ? "localised at frame " + std::to_string(localised_at)

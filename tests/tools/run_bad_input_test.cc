@@ -251,6 +251,9 @@ TEST(RunInterrupted, DuringTheGlobalBaKeepsTheOnlineTrajectory) {
   const nlohmann::json& summary = report.at("summary");
   EXPECT_TRUE(summary.at("interrupted").get<bool>());
   EXPECT_FALSE(summary.at("refinement").at("done").get<bool>());
+  // report.html shows the printed summary: it says so too.
+  EXPECT_THAT(report.at("summary_text").get<std::string>(),
+              HasSubstr("the global BA after the last frame was stopped"));
   EXPECT_EQ(summary.at("frames").get<int>(), 200);
   EXPECT_EQ(summary.at("frames_with_pose").get<int>(), 200);
   EXPECT_FALSE(fs::exists(out + "/trajectory_online.txt"));
