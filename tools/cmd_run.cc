@@ -227,7 +227,6 @@ DatasetOptions DatasetOptionsFromFlags(const SystemOptions& options) {
 struct FramesRun {
   size_t done = 0;
   int signal = 0;  // The stop signal received (0: none, the run reached the end).
-  bool in_refinement = false;  // It came during the global refinement, after the last frame.
   double wall_s = 0.0;
   std::vector<double> rss_mb;  // Resident memory after each frame (report.json, memory.png).
 };
@@ -284,8 +283,8 @@ FramesRun TrackEveryFrame(Dataset* dataset, SystemEnsemble* runs, const StopSign
 
 // The global refinement of the whole run, every draw (the BA estimator's global bundle
 // adjustment, ba.final_ba); not after an interruption: the user asked to stop. A stop signal
-// during it ends it (the estimates stay as without it) and counts as an interruption
-// (run->signal, run->in_refinement).
+// during it ends it (the estimates stay as without it; RefinementSummary::stopped) and counts as
+// an interruption (run->signal).
 std::vector<RefinementSummary> Refine(SystemEnsemble* runs, FramesRun* run,
                                       const SystemOptions& options, const StopSignal& stop) {
   if (run->signal != 0) {
@@ -304,8 +303,6 @@ std::vector<RefinementSummary> Refine(SystemEnsemble* runs, FramesRun* run,
     return stop.received() != 0;
   });
   run->signal = stop.received();
-  run->in_refinement = std::any_of(refinements.begin(), refinements.end(),
-                                   [](const RefinementSummary& r) { return r.stopped; });
   if (options.estimator == "ba") {
     for (int k = 0; k < runs->size(); ++k) {
       std::cerr << "[run] ";
@@ -962,7 +959,8 @@ int RunRun(const std::vector<std::string>& args) {
   }
   std::cout << "report      " << dir << "/report.html (3D view, charts; written in " << std::fixed
             << std::setprecision(0) << report_ms << " ms)\n";
-  if (run.in_refinement) {
+  if (std::any_of(refinements.begin(), refinements.end(),
+                  [](const RefinementSummary& r) { return r.stopped; })) {
     // With --draws N the draws are refined side by side: one whose BA had finished keeps it.
     const auto finished = std::count_if(refinements.begin(), refinements.end(),
                                         [](const RefinementSummary& r) { return r.done; });
